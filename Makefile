@@ -1,0 +1,33 @@
+# Two commands on a fresh machine: `make demo` and `make test`. Each creates .venv and installs
+# keyin into it on first use. TORCH_SPEC picks the torch build installed first: the default is the
+# CPU build (torch==2.13.0); on a GPU machine use e.g. `make test TORCH_SPEC=` to keep your own torch.
+VENV ?= .venv
+PYTHON ?= python3
+TORCH_SPEC ?= torch==2.13.0
+EXTRAS ?= dev,sim
+BIN = $(VENV)/bin
+STAMP = $(VENV)/.keyin-installed
+
+.PHONY: demo test test-slow install clean-venv
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	if [ -n "$(TORCH_SPEC)" ]; then $(BIN)/pip install "$(TORCH_SPEC)"; fi
+	$(BIN)/pip install -e ".[$(EXTRAS)]"
+	touch $(STAMP)
+
+install: $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/keyin-generate dataset=brownian 'splits={test: 1000}'
+	$(BIN)/keyin-eval model=random dataset=brownian
+	$(BIN)/keyin-eval model=constant dataset=brownian
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow
+
+clean-venv:
+	rm -rf $(VENV)

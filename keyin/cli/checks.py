@@ -1,0 +1,70 @@
+"""Config validation: turn a bad value into one line naming the key, the value and what is allowed."""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from keyin.errors import ConfigError
+
+DATASET_SIZES = ("image_size", "channels", "n_cond", "n_future", "n_keyframes", "max_offset")
+
+
+def require_positive_int(value: Any, key: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ConfigError(f"{key}={value!r} must be a positive integer")
+    return value
+
+
+def require_seed(value: Any, key: str = "seed") -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**32:
+        raise ConfigError(f"{key}={value!r} must be an integer in [0, 2**32)")
+    return value
+
+
+def check_dataset(dataset: Mapping[str, Any]) -> None:
+    """Sizes positive, image size a power of two, and S <= N <= M·S (REFERENCE §1, §3.8)."""
+    for key in DATASET_SIZES:
+        require_positive_int(dataset.get(key), f"dataset.{key}")
+    size = dataset["image_size"]
+    if size < 8 or size & (size - 1):
+        raise ConfigError(f"dataset.image_size={size} must be a power of two >= 8 (32, 64, ...)")
+    n_future, n_keys, max_offset = dataset["n_future"], dataset["n_keyframes"], dataset["max_offset"]
+    if max_offset > n_future:
+        raise ConfigError(
+            f"dataset.max_offset={max_offset} (S) must be <= dataset.n_future={n_future} (N): "
+            f"an offset longer than the clip can never be supervised"
+        )
+    if n_keys * max_offset < n_future:
+        raise ConfigError(
+            f"dataset.n_keyframes * dataset.max_offset = {n_keys}*{max_offset} = "
+            f"{n_keys * max_offset} (M*S) must be >= dataset.n_future={n_future} (N), or the end "
+            f"of the clip can never be covered"
+        )
+    if dataset.get("train_source") not in ("generated", "files"):
+        raise ConfigError(
+            f"dataset.train_source={dataset.get('train_source')!r}; allowed: generated, files"
+        )
+
+
+def check_common(cfg: Mapping[str, Any]) -> None:
+    """Checks every entry point shares: the seed and the dataset."""
+    require_seed(cfg.get("seed"))
+    check_dataset(cfg["dataset"])
+
+
+STAGES = ("both", "interpolator", "keyframes")
+SCALE_COUNTS = ("batch_size", "stage1_steps", "stage2_steps", "val_every", "checkpoint_every", "val_clips", "eval_clips")
+
+
+def check_training(cfg: Mapping[str, Any]) -> None:
+    """What keyin-train needs beyond the common checks."""
+    if cfg["stage"] not in STAGES:
+        raise ConfigError(f"stage={cfg['stage']!r}; allowed: {', '.join(STAGES)}")
+    if not cfg["model"]["trainable"]:
+        raise ConfigError(
+            f"model={cfg['model']['name']} needs no training; evaluate it with "
+            f"`keyin-eval model={cfg['model']['name']}`"
+        )
+    for key in SCALE_COUNTS:
+        require_positive_int(cfg["scale"][key], f"scale.{key}")
+    require_positive_int(cfg["num_workers"] + 1, "num_workers + 1")

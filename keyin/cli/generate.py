@@ -1,0 +1,45 @@
+"""keyin-generate dataset=<name>: write a dataset's splits as HDF5 shards with a manifest."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import hydra
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from keyin.cli.app import CONFIG_DIR, run_dir, user_errors, write_metrics
+from keyin.cli.checks import check_common, require_positive_int
+from keyin.data.generate import generate_dataset
+
+
+@user_errors
+def generate(cfg: DictConfig) -> dict:
+    check_common(cfg)
+    require_positive_int(cfg.shard_size, "shard_size")
+    require_positive_int(cfg.workers, "workers")
+    splits = OmegaConf.to_container(cfg.splits)
+    for split, count in splits.items():
+        require_positive_int(count, f"splits.{split}")
+    stats = generate_dataset(
+        generator=instantiate(cfg.dataset.generator),
+        folder=Path(cfg.data_dir) / cfg.dataset.name,
+        dataset=cfg.dataset.name,
+        splits=splits,
+        shard_size=cfg.shard_size,
+        seed=cfg.seed,
+        workers=cfg.workers,
+        config=OmegaConf.to_container(cfg.dataset.generator, resolve=True),
+        progress=cfg.progress,
+    )
+    write_metrics(dict(stats, dataset=cfg.dataset.name, folder=str(Path(cfg.data_dir) / cfg.dataset.name)), run_dir())
+    return stats
+
+
+@hydra.main(config_path=CONFIG_DIR, config_name="generate", version_base="1.3")
+def main(cfg: DictConfig) -> None:
+    generate(cfg)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Datasets: the Brownian generator, the HDF5 format and the LightningDataModules."""

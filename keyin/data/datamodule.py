@@ -1,0 +1,52 @@
+"""The LightningDataModule of every dataset: on-the-fly or sharded train clips, fixed val/test."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+import lightning as L
+from torch.utils.data import DataLoader, Dataset
+
+from keyin.data.clips import GeneratedClips, ShardClips
+from keyin.data.generate import split_seed
+from keyin.data.hdf5 import split_files
+
+
+def split_clips(
+    dataset: Mapping[str, Any], generator: Any, split: str, size: int | None, data_dir: str | Path
+) -> Dataset:
+    """One split as a torch Dataset.
+
+    Generated datasets (``train_source: generated``) make clip i of a split from the same seed
+    as ``keyin-generate`` does, so on-the-fly clips equal the written shards; ``size`` caps the
+    number of clips. Otherwise the split's shards are read from ``<data_dir>/<name>/``.
+    """
+    if dataset["train_source"] == "generated":
+        total = dataset["splits"][split] if size is None else size
+        return GeneratedClips(generator, total, split_seed(dataset["seed"], split), dataset["n_future"])
+    files = split_files(Path(data_dir) / dataset["name"], split)
+    image = (dataset["image_size"], dataset["image_size"], dataset["channels"])
+    return ShardClips(files, image, dataset["n_cond"], dataset["n_future"])
+
+
+class ClipDataModule(L.LightningDataModule):
+    """Shuffled training clips and a fixed validation set."""
+
+    def __init__(self, train: Dataset, val: Dataset, batch_size: int, num_workers: int) -> None:
+        super().__init__()
+        self.train, self.val = train, val
+        self.batch_size, self.num_workers = batch_size, num_workers
+
+    def train_dataloader(self) -> DataLoader:
+        return DataLoader(
+            self.train,
+            batch_size=self.batch_size,
+            shuffle=True,
+            drop_last=True,
+            num_workers=self.num_workers,
+            persistent_workers=self.num_workers > 0,
+        )
+
+    def val_dataloader(self) -> DataLoader:
+        return DataLoader(self.val, batch_size=len(self.val), num_workers=0)

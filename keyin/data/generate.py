@@ -1,0 +1,173 @@
+"""Write a generated dataset as HDF5 shards with a manifest: parallel, resumable, with progress.
+
+Any generator with ``n_cond`` and ``generate(index, seed) -> (arrays of one clip, attempts)`` plugs
+in (``BrownianGenerator``, ``PushingGenerator``). Clip ``i`` of a split is generated from
+``split_seed + i`` so the result does not depend on the worker count. Each shard is written to a
+temporary file and renamed, then recorded with its checksum in the manifest; a re-run skips every
+shard whose file matches the manifest and regenerates the rest.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Mapping, Protocol
+
+import numpy as np
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from keyin.data.hdf5 import MANIFEST_NAME, read_manifest, sha256_of, write_manifest, write_shard
+from keyin.errors import DatasetFormatError
+
+# Splits draw from disjoint seed ranges: clip i of split s uses seed + SPLIT_OFFSETS[s] + i.
+SPLIT_OFFSETS = {"train": 0, "val": 100_000_000, "test": 200_000_000}
+
+
+class ClipGenerator(Protocol):
+    n_cond: int
+
+    def generate(self, index: int, seed: int) -> tuple[dict[str, np.ndarray], int]: ...
+
+
+@dataclass(frozen=True)
+class ShardJob:
+    split: str
+    shard: int
+    start: int
+    count: int
+
+    @property
+    def file(self) -> str:
+        return f"{self.split}-{self.shard:05d}.h5"
+
+
+def plan_shards(splits: Mapping[str, int], shard_size: int) -> list[ShardJob]:
+    """Cut every split into shards of at most ``shard_size`` clips."""
+    jobs = []
+    for split, total in splits.items():
+        for shard, start in enumerate(range(0, total, shard_size)):
+            jobs.append(ShardJob(split, shard, start, min(shard_size, total - start)))
+    return jobs
+
+
+def split_seed(seed: int, split: str) -> int:
+    """The base seed of a split; unknown split names get their own range from a stable hash."""
+    if split in SPLIT_OFFSETS:
+        return seed + SPLIT_OFFSETS[split]
+    return seed + 300_000_000 + sum(ord(ch) * 7919**i for i, ch in enumerate(split)) % 10_000_000
+
+
+def write_shard_job(
+    generator: ClipGenerator, job: ShardJob, folder: Path, seed: int, meta: Mapping[str, Any]
+) -> tuple[ShardJob, str, int]:
+    """Generate and write one shard; returns the job, its checksum and the attempts it took."""
+    base = split_seed(seed, job.split)
+    clips, attempts = [], 0
+    for index in range(job.start, job.start + job.count):
+        arrays, tries = generator.generate(index, base)
+        clips.append(arrays)
+        attempts += tries
+    stacked = {name: np.stack([clip[name] for clip in clips]) for name in clips[0]}
+    attrs = dict(meta, seed=base, split=job.split, n_cond=generator.n_cond, first_index=job.start)
+    checksum = write_shard(folder / job.file, stacked, attrs)
+    return job, checksum, attempts
+
+
+def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[str, dict]]:
+    """Manifest entries whose shard file is present and matches its checksum.
+
+    Raises:
+        DatasetFormatError: the folder holds a dataset generated with another config.
+    """
+    if not (folder / MANIFEST_NAME).is_file():
+        return {}
+    manifest = read_manifest(folder)
+    if manifest.get("config") != json.loads(json.dumps(dict(config))):
+        raise DatasetFormatError(
+            f"{folder} holds a dataset generated with another generator config; choose another "
+            f"data_dir or delete the folder to regenerate it"
+        )
+    done: dict[str, dict[str, dict]] = {}
+    for split, entries in manifest["splits"].items():
+        for entry in entries:
+            path = folder / entry["file"]
+            if path.is_file() and sha256_of(path) == entry["sha256"]:
+                done.setdefault(split, {})[entry["file"]] = entry
+    return done
+
+
+def generate_dataset(
+    generator: ClipGenerator,
+    folder: Path,
+    dataset: str,
+    splits: Mapping[str, int],
+    shard_size: int,
+    seed: int,
+    workers: int = 1,
+    config: Mapping[str, Any] | None = None,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Generate (or finish generating) a dataset folder.
+
+    Returns:
+        Statistics: clips written, shards skipped, seconds, clips/s, rejection rate.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    meta = {"generator": type(generator).__name__, "config": dict(config or asdict(generator))}
+    done = finished_shards(folder, meta["config"])
+    jobs = plan_shards(splits, shard_size)
+    todo = [job for job in jobs if job.file not in done.get(job.split, {})]
+    entries = {split: dict(done.get(split, {})) for split in splits}
+    start_time, clips, attempts = time.perf_counter(), 0, 0
+
+    def save_manifest() -> None:
+        ordered = {s: [entries[s][name] for name in sorted(entries[s])] for s in entries}
+        write_manifest(folder, dataset, ordered, meta["config"])
+
+    columns = (
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total} clips"),
+        TextColumn("{task.fields[rate]:.1f} clips/s, rejected {task.fields[rejected]:.0%}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, disable=not progress) as bar:
+        task = bar.add_task(
+            f"{dataset} -> {folder}", total=sum(j.count for j in todo), rate=0.0, rejected=0.0
+        )
+
+        def advance(job: ShardJob, checksum: str, tries: int) -> None:
+            nonlocal clips, attempts
+            entries[job.split][job.file] = {"file": job.file, "n": job.count, "sha256": checksum}
+            save_manifest()
+            clips, attempts = clips + job.count, attempts + tries
+            rate = clips / max(time.perf_counter() - start_time, 1e-9)
+            bar.update(task, advance=job.count, rate=rate, rejected=1 - clips / max(attempts, 1))
+
+        if workers <= 1:
+            for job in todo:
+                advance(*write_shard_job(generator, job, folder, seed, meta))
+        else:
+            # spawn: a forked worker of a parent that has rendered with EGL can hang.
+            context = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(workers, mp_context=context) as pool:
+                futures = [
+                    pool.submit(write_shard_job, generator, job, folder, seed, meta) for job in todo
+                ]
+                for future in as_completed(futures):
+                    advance(*future.result())
+    save_manifest()
+    seconds = time.perf_counter() - start_time
+    return {
+        "clips": clips,
+        "shards_skipped": len(jobs) - len(todo),
+        "seconds": seconds,
+        "clips_per_s": clips / seconds if clips else 0.0,
+        "rejection_rate": 1 - clips / attempts if attempts else 0.0,
+    }

@@ -1,0 +1,76 @@
+"""Segments for training and diagnosing the interpolator (stage 1, REFERENCE §2.5, §2.7a).
+
+A segment of a clip is a start frame ``a`` and an offset ``o``: the interpolator sees frames ``a``
+and ``a + o`` and must produce frames ``a + 1 … a + o`` (output ``i`` sits at ``a + 1 + i``; the
+last output is the end keyframe itself).
+"""
+
+from __future__ import annotations
+
+import torch
+
+
+def partition_segments(
+    batch: int, clip_length: int, offset_min: int, offset_max: int, generator: torch.Generator
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Cut every clip into consecutive segments with offsets uniform in [offset_min, offset_max].
+
+    Each clip starts its partition at a random frame in [0, offset_max) so that every frame is
+    an endpoint as often as any other; the partition stops before it would leave the clip.
+
+    Returns:
+        clip (R,), start (R,), offset (R,) int64 for the R segments of the whole batch.
+    """
+    longest = clip_length // offset_min + 1
+    offsets = torch.randint(offset_min, offset_max + 1, (batch, longest), generator=generator)
+    first = torch.randint(0, offset_max, (batch, 1), generator=generator)
+    ends = first + offsets.cumsum(dim=1)
+    starts = ends - offsets
+    inside = ends <= clip_length - 1
+    clip = torch.arange(batch)[:, None].expand_as(offsets)
+    return clip[inside], starts[inside], offsets[inside]
+
+
+def all_segments(
+    batch: int, first: int, last: int, offset: int
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Every segment of one offset whose frames lie in [first, last], for every clip.
+
+    Returns:
+        clip (R,), start (R,), offset (R,) int64.
+    """
+    starts = torch.arange(first, last - offset + 1)
+    clip = torch.arange(batch).repeat_interleave(len(starts))
+    start = starts.repeat(batch)
+    return clip, start, torch.full_like(start, offset)
+
+
+def segment_frames(start: torch.Tensor, offset: torch.Tensor, max_offset: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """Frame indices of each segment's S outputs and which of them exist.
+
+    Args:
+        start, offset: (R,).
+    Returns:
+        frames (R, S) int64 (clamped into the segment for outputs that do not exist),
+        valid (R, S) bool, True for outputs i < offset.
+    """
+    steps = torch.arange(max_offset)
+    valid = steps[None, :] < offset[:, None]
+    frames = start[:, None] + 1 + torch.minimum(steps[None, :], offset[:, None] - 1)
+    return frames, valid
+
+
+def crosses_keyframe(
+    keyframes: torch.Tensor, clip: torch.Tensor, start: torch.Tensor, offset: torch.Tensor
+) -> torch.Tensor:
+    """Whether a ground-truth keyframe lies strictly inside each segment (a "bent" segment).
+
+    Args:
+        keyframes: (B, L) bool on the clip axis.
+        clip, start, offset: (R,).
+    Returns:
+        (R,) bool.
+    """
+    counts = torch.nn.functional.pad(keyframes.long().cumsum(dim=1), (1, 0))  # (B, L + 1)
+    inside = counts[clip, start + offset] - counts[clip, start + 1]
+    return inside > 0

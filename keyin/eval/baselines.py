@@ -1,0 +1,40 @@
+"""Keyframe baselines that need no training (REFERENCE §4): Random and Constant.
+
+Both follow the discovery interface shared by every method: called with a batch of clips
+``frames`` (B, L, C, H, W) and their valid future lengths (B,), they return per clip the future
+indices they mark as keyframes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+
+class RandomKeyframes:
+    """``n_keyframes`` distinct future frames, uniform over each clip's valid future frames."""
+
+    def __init__(self, n_keyframes: int, seed: int = 0) -> None:
+        if n_keyframes < 1:
+            raise ValueError(f"n_keyframes must be >= 1, got {n_keyframes}")
+        self.n_keyframes = n_keyframes
+        self.rng = np.random.default_rng(seed)
+
+    def __call__(self, frames: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
+        picks = []
+        for length in future_length.tolist():
+            count = min(self.n_keyframes, length)
+            picks.append(sorted(self.rng.choice(length, size=count, replace=False).tolist()))
+        return picks
+
+
+class ConstantKeyframes:
+    """A keyframe every ``offset`` frames: future indices offset-1, 2·offset-1, ... < length."""
+
+    def __init__(self, offset: int) -> None:
+        if offset < 1:
+            raise ValueError(f"offset must be >= 1, got {offset}")
+        self.offset = offset
+
+    def __call__(self, frames: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
+        return [list(range(self.offset - 1, length, self.offset)) for length in future_length.tolist()]

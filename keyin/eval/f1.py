@@ -1,0 +1,75 @@
+"""Keyframe discovery metrics (REFERENCE §5.1): exact-match micro F1 and its companions.
+
+Keyframes are sets of future-frame indices per clip. The primary score is micro F1 over the test
+set, ``2·ΣTP / (Σ|P| + Σ|G|)``, with exact index matches. Secondary: macro F1 (mean per-clip F1),
+F1 with a ±1 tolerance under one-to-one matching, and the mean distance from each prediction to
+the nearest ground-truth keyframe.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
+import numpy as np
+
+
+def tolerant_matches(predicted: Sequence[int], truth: Sequence[int], tolerance: int) -> int:
+    """Size of a maximum one-to-one matching with ``|p - g| <= tolerance``.
+
+    Both sets lie on a line, so the greedy sweep (each truth, in order, takes the leftmost free
+    prediction within reach) is optimal.
+    """
+    preds = sorted(predicted)
+    matches, next_free = 0, 0
+    for g in sorted(truth):
+        while next_free < len(preds) and preds[next_free] < g - tolerance:
+            next_free += 1
+        if next_free < len(preds) and preds[next_free] <= g + tolerance:
+            matches += 1
+            next_free += 1
+    return matches
+
+
+def _f1(tp: float, n_pred: float, n_true: float) -> float:
+    return 1.0 if n_pred + n_true == 0 else 2.0 * tp / (n_pred + n_true)
+
+
+def keyframe_scores(
+    predicted: Iterable[Iterable[int]], truth: Iterable[Iterable[int]], n_future: int
+) -> dict[str, float]:
+    """Keyframe F1 and companions over a set of clips.
+
+    Args:
+        predicted: per clip, predicted future indices; duplicates and indices outside
+            [0, n_future) are dropped (a keyframe past the clip is no prediction).
+        truth: per clip, ground-truth future indices.
+        n_future: N, the number of future frames.
+    Returns:
+        f1, precision, recall (micro, exact), f1_macro, f1_tol1, mean_distance (mean over
+        predictions of the distance to the nearest truth; NaN if none), n_sequences,
+        n_predicted, n_true (per clip means).
+    """
+    tp = tp1 = n_pred = n_true = 0
+    per_clip, distances, n_clips = [], [], 0
+    for pred_clip, true_clip in zip(predicted, truth, strict=True):
+        preds = {int(p) for p in pred_clip if 0 <= int(p) < n_future}
+        trues = {int(g) for g in true_clip}
+        hits = len(preds & trues)
+        tp, n_pred, n_true = tp + hits, n_pred + len(preds), n_true + len(trues)
+        tp1 += tolerant_matches(list(preds), list(trues), tolerance=1)
+        per_clip.append(_f1(hits, len(preds), len(trues)))
+        if trues:
+            true_array = np.fromiter(trues, dtype=int)
+            distances.extend(np.abs(true_array - p).min() for p in preds)
+        n_clips += 1
+    return {
+        "f1": _f1(tp, n_pred, n_true),
+        "precision": tp / n_pred if n_pred else 0.0,
+        "recall": tp / n_true if n_true else 0.0,
+        "f1_macro": float(np.mean(per_clip)) if per_clip else float("nan"),
+        "f1_tol1": _f1(tp1, n_pred, n_true),
+        "mean_distance": float(np.mean(distances)) if distances else float("nan"),
+        "n_sequences": n_clips,
+        "n_predicted": n_pred / max(n_clips, 1),
+        "n_true": n_true / max(n_clips, 1),
+    }

@@ -1,0 +1,88 @@
+"""Every console script end to end (tiny), and bad inputs giving one clear error line."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+
+def run(module, *overrides, cwd):
+    result = subprocess.run(
+        [sys.executable, "-m", f"keyin.cli.{module}", *overrides],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    return result
+
+
+@pytest.fixture(scope="module")
+def brownian_test_set(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cli")
+    result = run("generate", "dataset=brownian", "splits={test: 40}", "shard_size=25",
+                 "progress=false", cwd=root)
+    assert result.returncode == 0, result.stderr
+    return root
+
+
+def last_json(stdout):
+    return json.loads(stdout.strip().splitlines()[-1])
+
+
+def test_generate_writes_shards_a_manifest_and_a_run_dir(brownian_test_set):
+    folder = brownian_test_set / "data" / "brownian"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "manifest.json", "test-00000.h5", "test-00001.h5"]
+    runs = list((brownian_test_set / "runs" / "generate_brownian").glob("*/*/metrics.json"))
+    assert len(runs) == 1 and json.loads(runs[0].read_text())["clips"] == 40
+
+
+@pytest.mark.parametrize("model", ["random", "constant"])
+def test_eval_baseline_prints_metrics_and_writes_them(brownian_test_set, model):
+    result = run("eval", f"model={model}", "progress=false", cwd=brownian_test_set)
+    assert result.returncode == 0, result.stderr
+    metrics = last_json(result.stdout)
+    for key in ("f1", "f1_macro", "f1_tol1", "precision", "recall", "n_sequences"):
+        assert 0.0 <= metrics[key] <= (1.0 if key != "n_sequences" else 40)
+    assert metrics["n_sequences"] == 40 and metrics["method"] == model
+    assert metrics["dataset"] == "brownian"
+    saved = list((brownian_test_set / "runs" / f"eval_{model}_brownian").glob("*/*/metrics.json"))
+    assert json.loads(saved[-1].read_text()) == metrics
+
+
+def test_eval_reads_any_file_given_by_path(brownian_test_set):
+    shard = brownian_test_set / "data" / "brownian" / "test-00001.h5"
+    result = run("eval", "model=constant", f"data={shard}", "progress=false", cwd=brownian_test_set)
+    assert result.returncode == 0, result.stderr
+    assert last_json(result.stdout)["n_sequences"] == 15
+
+
+@pytest.mark.parametrize("module", ["plan", "report"])
+def test_commands_not_built_yet_say_so_and_exit_2(module, tmp_path):
+    result = run(module, cwd=tmp_path)
+    assert result.returncode == 2
+    assert "not available yet" in result.stderr
+
+
+BAD_INPUTS = [
+    (["model=random", "dataset=nope"], "Could not find 'dataset/nope'"),
+    (["model=random", "dataset.n_futur=3"], "Key 'n_futur' is not in struct"),
+    (["model=random", "dataset.max_offset=40"], "dataset.max_offset=40 (S) must be <= dataset.n_future=30"),
+    (["model=random", "dataset.max_offset=4"], "M*S) must be >= dataset.n_future=30"),
+    (["model=random", "dataset.n_keyframes=-2"], "dataset.n_keyframes=-2 must be a positive integer"),
+    (["model=random", "dataset.image_size=0"], "dataset.image_size=0 must be a positive integer"),
+    (["model=random", "seed=-1"], "seed=-1 must be an integer"),
+    (["model=random", "data=/no/such/file.h5"], "does not exist"),
+    (["dataset=brownian"], "choose what to evaluate: model=random|constant or ckpt="),
+    (["model=random", "batch_size=0"], "batch_size=0 must be a positive integer"),
+]
+
+
+@pytest.mark.parametrize("overrides,message", BAD_INPUTS)
+def test_bad_input_gives_one_clear_error(tmp_path, overrides, message):
+    result = run("eval", *overrides, cwd=tmp_path)
+    assert result.returncode != 0
+    assert message in result.stderr
+    assert "Traceback" not in result.stderr

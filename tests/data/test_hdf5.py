@@ -1,0 +1,126 @@
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from keyin.data.brownian import BrownianGenerator
+from keyin.data.clips import ShardClips
+from keyin.data.generate import generate_dataset
+from keyin.data.hdf5 import (
+    check_compatible,
+    inspect_shard,
+    load_arrays,
+    split_files,
+    write_shard,
+)
+from keyin.errors import DatasetFormatError
+
+ATTRS = {"generator": "test", "config": {"a": 1}, "seed": 3, "split": "test", "n_cond": 2}
+
+
+def arrays(n=3, length=6, size=8, channels=1):
+    rng = np.random.default_rng(0)
+    return {
+        "frames": rng.integers(0, 256, (n, length, size, size, channels), dtype=np.uint8),
+        "length": np.full(n, length, dtype=np.int32),
+        "keyframes": rng.random((n, length)) < 0.3,
+        "positions": rng.random((n, length, 2)).astype(np.float32),
+    }
+
+
+def test_round_trip_keeps_arrays_and_attributes(tmp_path):
+    data = arrays()
+    write_shard(tmp_path / "a.h5", data, ATTRS)
+    loaded = load_arrays(tmp_path / "a.h5")
+    for name, value in data.items():
+        np.testing.assert_array_equal(loaded[name], value)
+    info = inspect_shard(tmp_path / "a.h5")
+    assert (info.n, info.clip_length, info.image_shape) == (3, 6, (8, 8, 1))
+    assert info.config == {"a": 1} and info.n_cond == 2 and info.split == "test"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.h5"]  # no temporary file left
+
+
+def test_missing_file_is_named(tmp_path):
+    with pytest.raises(DatasetFormatError, match="does not exist"):
+        inspect_shard(tmp_path / "nope.h5")
+
+
+def test_truncated_file_is_refused(tmp_path):
+    write_shard(tmp_path / "a.h5", arrays(), ATTRS)
+    raw = (tmp_path / "a.h5").read_bytes()
+    (tmp_path / "a.h5").write_bytes(raw[: len(raw) // 3])
+    with pytest.raises(DatasetFormatError, match="truncated or corrupt"):
+        inspect_shard(tmp_path / "a.h5")
+
+
+def test_wrong_format_version_is_refused(tmp_path):
+    write_shard(tmp_path / "a.h5", arrays(), ATTRS)
+    with h5py.File(tmp_path / "a.h5", "a") as handle:
+        handle.attrs["format_version"] = 99
+    with pytest.raises(DatasetFormatError, match="format_version 99"):
+        inspect_shard(tmp_path / "a.h5")
+
+
+def test_foreign_hdf5_file_is_refused(tmp_path):
+    with h5py.File(tmp_path / "x.h5", "w") as handle:
+        handle["frames"] = np.zeros((2, 3, 8, 8, 1), np.uint8)
+    with pytest.raises(DatasetFormatError, match="lacks the attributes"):
+        inspect_shard(tmp_path / "x.h5")
+
+
+def test_mismatched_image_size_names_both_shapes(tmp_path):
+    write_shard(tmp_path / "a.h5", arrays(size=8, channels=3), ATTRS)
+    with pytest.raises(DatasetFormatError, match=r"\(8, 8, 3\) != config \(32, 32, 1\)"):
+        check_compatible(inspect_shard(tmp_path / "a.h5"), (32, 32, 1), 2, 4)
+    with pytest.raises(DatasetFormatError, match="does not match the dataset config"):
+        ShardClips([tmp_path / "a.h5"], (32, 32, 1), 2, 4)
+
+
+def test_generation_resumes_and_detects_corruption(tmp_path):
+    generator = BrownianGenerator()
+    kwargs = dict(dataset="brownian", splits={"test": 10}, shard_size=4, seed=0, progress=False)
+    first = generate_dataset(generator, tmp_path, **kwargs)
+    assert first["clips"] == 10 and first["shards_skipped"] == 0
+    files = split_files(tmp_path, "test")
+    assert [f.name for f in files] == ["test-00000.h5", "test-00001.h5", "test-00002.h5"]
+    again = generate_dataset(generator, tmp_path, **kwargs)
+    assert again["clips"] == 0 and again["shards_skipped"] == 3
+
+    before = load_arrays(files[1])["frames"]
+    raw = bytearray(files[1].read_bytes())
+    raw[-100] ^= 0xFF
+    files[1].write_bytes(bytes(raw))
+    with pytest.raises(DatasetFormatError, match="checksum"):
+        split_files(tmp_path, "test")
+    repaired = generate_dataset(generator, tmp_path, **kwargs)
+    assert repaired["clips"] == 4 and repaired["shards_skipped"] == 2
+    np.testing.assert_array_equal(load_arrays(split_files(tmp_path, "test")[1])["frames"], before)
+
+
+def test_generation_is_independent_of_worker_count(tmp_path):
+    generator = BrownianGenerator()
+    kwargs = dict(dataset="brownian", splits={"val": 6}, shard_size=3, seed=4, progress=False)
+    generate_dataset(generator, tmp_path / "one", workers=1, **kwargs)
+    generate_dataset(generator, tmp_path / "two", workers=2, **kwargs)
+    for a, b in zip(split_files(tmp_path / "one", "val"), split_files(tmp_path / "two", "val")):
+        np.testing.assert_array_equal(load_arrays(a)["frames"], load_arrays(b)["frames"])
+
+
+def test_a_folder_of_another_config_is_not_mixed_in(tmp_path):
+    kwargs = dict(dataset="brownian", splits={"test": 2}, shard_size=2, seed=0, progress=False)
+    generate_dataset(BrownianGenerator(), tmp_path, **kwargs)
+    with pytest.raises(DatasetFormatError, match="another generator config"):
+        generate_dataset(BrownianGenerator(speed=3.0), tmp_path, **kwargs)
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["config"]["speed"] == 2.0
+
+
+def test_shard_clips_returns_future_keyframes_and_lengths(tmp_path):
+    generate_dataset(BrownianGenerator(), tmp_path, "brownian", {"test": 3}, 3, 0, progress=False)
+    clips = ShardClips(split_files(tmp_path, "test"), (32, 32, 1), 5, 30)
+    item = clips[2]
+    assert item["frames"].shape == (35, 1, 32, 32) and item["frames"].max() == 1.0
+    raw = load_arrays(split_files(tmp_path, "test")[0])
+    np.testing.assert_array_equal(item["keyframes"].numpy(), raw["keyframes"][2, 5:])
+    assert int(item["future_length"]) == 30
