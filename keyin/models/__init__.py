@@ -1,0 +1,21 @@
+"""Neural-network modules of KEYIN and its baselines (REFERENCE §2); nn.Modules only, no losses."""
+
+from keyin.models.attention import attention_posterior
+from keyin.models.conv import ConvDecoder, ConvEncoder
+from keyin.models.interpolator import Interpolator, InterpolatorPosterior
+from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
+from keyin.models.recurrent import MLP, LSTMBlock, LSTMState, state_from_vector
+
+__all__ = [
+    "ConvDecoder",
+    "ConvEncoder",
+    "Interpolator",
+    "InterpolatorPosterior",
+    "KeyframeOutput",
+    "KeyframePredictor",
+    "LSTMBlock",
+    "LSTMState",
+    "MLP",
+    "attention_posterior",
+    "state_from_vector",
+]

@@ -1,0 +1,209 @@
+"""DCGAN-style convolutional frame encoder and decoder (REFERENCE §2.2).
+
+The encoder has log2(H) - 2 stride-2 blocks (3 at 32×32, 4 at 64×64, as the paper's "three / four
+layers") and a 4×4 valid head to a 1×1 embedding; the decoder mirrors it. Optional CoordConv inputs
+(two fixed planes holding the pixel's x and y in [-1, 1]) make position-like embeddings easy to
+learn, which is what a linear-motion interpolator needs on the Brownian data.
+"""
+
+import math
+
+import torch
+from torch import Tensor, nn
+
+NORMS = ("batch", "group", "none")
+MAX_GROUPS = 8
+
+
+def conv_depth(image_size: int) -> int:
+    """Number of stride-2 blocks for a square image (REFERENCE §2.2).
+
+    Args:
+        image_size: H = W; a power of two, at least 8.
+    Returns:
+        log2(image_size) - 2 (3 at 32, 4 at 64).
+    Raises:
+        ValueError: if image_size is not a power of two ≥ 8.
+    """
+    if image_size < 8 or image_size & (image_size - 1):
+        raise ValueError(f"image_size must be a power of two >= 8 (e.g. 32 or 64), got {image_size}")
+    return image_size.bit_length() - 3
+
+
+def coordinate_planes(size: int, like: Tensor) -> Tensor:
+    """Two fixed planes with each pixel's x (first) and y (second) coordinate in [-1, 1].
+
+    Args:
+        size: H = W of the planes.
+        like: any tensor; the planes take its device and dtype.
+    Returns:
+        (1, 2, size, size).
+    """
+    axis = torch.linspace(-1.0, 1.0, size, device=like.device, dtype=like.dtype)
+    y_plane, x_plane = torch.meshgrid(axis, axis, indexing="ij")
+    return torch.stack([x_plane, y_plane]).unsqueeze(0)
+
+
+def with_coordinates(features: Tensor) -> Tensor:
+    """Concatenate the coordinate planes of the features' resolution as two extra channels.
+
+    Args:
+        features: (B, C, H, W) with H = W.
+    Returns:
+        (B, C + 2, H, W).
+    """
+    planes = coordinate_planes(features.shape[-1], features)
+    return torch.cat([features, planes.expand(features.shape[0], -1, -1, -1)], dim=1)
+
+
+def normalization(norm: str, channels: int) -> nn.Module:
+    """The normalisation layer named by `norm` for `channels` feature maps.
+
+    GroupNorm uses gcd(8, channels) groups, so that small widths still divide evenly.
+
+    Args:
+        norm: "batch", "group" or "none".
+        channels: number of feature maps.
+    Returns:
+        BatchNorm2d, GroupNorm or Identity.
+    """
+    if norm == "batch":
+        return nn.BatchNorm2d(channels)
+    if norm == "group":
+        return nn.GroupNorm(math.gcd(MAX_GROUPS, channels), channels)
+    return nn.Identity()
+
+
+def _check_norm(norm: str) -> None:
+    if norm not in NORMS:
+        raise ValueError(f"norm must be one of {NORMS}, got {norm!r}")
+
+
+class ConvEncoder(nn.Module):
+    """Frames in [0, 1] → tanh embeddings (REFERENCE §2.2, CNN_enc).
+
+    Stride-2 conv4 blocks with widths F, 2F, 4F (, 8F), LeakyReLU(0.2), normalisation on all but the
+    first block, then a 4×4 valid conv head to E and tanh (keeps embedding-space MSE well scaled).
+
+    Args:
+        image_size: H = W, a power of two ≥ 8.
+        channels: C.
+        width: F, the first block's number of feature maps.
+        embed_dim: E.
+        coord_channels: concatenate x/y coordinate planes to the input of the first conv.
+        norm: "batch", "group" or "none".
+    """
+
+    def __init__(
+        self,
+        image_size: int,
+        channels: int,
+        width: int,
+        embed_dim: int,
+        coord_channels: bool = False,
+        norm: str = "batch",
+    ) -> None:
+        super().__init__()
+        _check_norm(norm)
+        depth = conv_depth(image_size)
+        self.image_shape = (channels, image_size, image_size)
+        self.coord_channels = coord_channels
+        blocks: list[nn.Module] = []
+        in_channels = channels + 2 if coord_channels else channels
+        for index in range(depth):
+            out_channels = width * 2**index
+            blocks.append(nn.Conv2d(in_channels, out_channels, 4, stride=2, padding=1))
+            if index > 0:
+                blocks.append(normalization(norm, out_channels))
+            blocks.append(nn.LeakyReLU(0.2))
+            in_channels = out_channels
+        self.blocks = nn.Sequential(*blocks)
+        self.head = nn.Conv2d(in_channels, embed_dim, 4)
+
+    def forward(self, frames: Tensor) -> Tensor:
+        """Embed frames.
+
+        Args:
+            frames: (..., C, H, W) in [0, 1]; any number of leading dims.
+        Returns:
+            (..., E) in (-1, 1).
+        """
+        if tuple(frames.shape[-3:]) != self.image_shape:
+            raise ValueError(f"expected frames (..., {self.image_shape}), got {tuple(frames.shape)}")
+        leading_shape = frames.shape[:-3]
+        images = frames.reshape(-1, *self.image_shape)  # (B', C, H, W)
+        if self.coord_channels:
+            images = with_coordinates(images)  # (B', C+2, H, W)
+        features = self.blocks(images)  # (B', F·2^(depth-1), 4, 4)
+        embeddings = torch.tanh(self.head(features)).flatten(1)  # (B', E)
+        return embeddings.reshape(*leading_shape, -1)
+
+
+class ConvDecoder(nn.Module):
+    """Embeddings → frame logits, the mirror of ConvEncoder (REFERENCE §2.2, CNN_dec).
+
+    A 4×4 transposed conv from 1×1 to 4×4, then stride-2 transposed conv4 blocks halving the width
+    up to H; normalisation and LeakyReLU(0.2) after every layer but the last. The output is
+    **logits**, not probabilities: callers apply `torch.sigmoid` for images and use
+    `binary_cross_entropy_with_logits` (or the sigmoid before the soft loss's mixtures) — keeping the
+    sigmoid outside lets reconstruction losses use the numerically stable logit form.
+
+    Args:
+        image_size: H = W, a power of two ≥ 8.
+        channels: C.
+        width: F, the feature maps of the last hidden layer (the encoder's first).
+        embed_dim: E.
+        coord_channels: concatenate x/y coordinate planes of the current resolution before each
+            stride-2 upsampling conv.
+        norm: "batch", "group" or "none".
+    """
+
+    def __init__(
+        self,
+        image_size: int,
+        channels: int,
+        width: int,
+        embed_dim: int,
+        coord_channels: bool = False,
+        norm: str = "batch",
+    ) -> None:
+        super().__init__()
+        _check_norm(norm)
+        depth = conv_depth(image_size)
+        self.coord_channels = coord_channels
+        top_channels = width * 2 ** (depth - 1)
+        self.head = nn.Sequential(
+            nn.ConvTranspose2d(embed_dim, top_channels, 4),
+            normalization(norm, top_channels),
+            nn.LeakyReLU(0.2),
+        )
+        extra_channels = 2 if coord_channels else 0
+        self.upsampling = nn.ModuleList()
+        in_channels = top_channels
+        for index in reversed(range(depth)):
+            is_last = index == 0
+            out_channels = channels if is_last else width * 2 ** (index - 1)
+            layers: list[nn.Module] = [
+                nn.ConvTranspose2d(in_channels + extra_channels, out_channels, 4, stride=2, padding=1)
+            ]
+            if not is_last:
+                layers += [normalization(norm, out_channels), nn.LeakyReLU(0.2)]
+            self.upsampling.append(nn.Sequential(*layers))
+            in_channels = out_channels
+
+    def forward(self, embeddings: Tensor) -> Tensor:
+        """Decode embeddings to logits.
+
+        Args:
+            embeddings: (..., E); any number of leading dims.
+        Returns:
+            (..., C, H, W) logits; `torch.sigmoid` of them are pixel probabilities.
+        """
+        leading_shape = embeddings.shape[:-1]
+        features = embeddings.reshape(-1, embeddings.shape[-1], 1, 1)  # (B', E, 1, 1)
+        features = self.head(features)  # (B', F·2^(depth-1), 4, 4)
+        for block in self.upsampling:
+            if self.coord_channels:
+                features = with_coordinates(features)  # (B', channels + 2, h, h)
+            features = block(features)  # (B', channels / 2 or C, 2h, 2h)
+        return features.reshape(*leading_shape, *features.shape[1:])

@@ -1,0 +1,236 @@
+"""The keyframe predictor: LSTM_cond, LSTM_inf + attention posterior, LSTM_key (REFERENCE §2.3a, §2.4).
+
+Also the Static and Jumpy baselines, which differ only in where the offset distributions come from
+(`offset_mode`).
+"""
+
+from typing import NamedTuple
+
+import torch
+from torch import Tensor, nn
+from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
+
+from keyin.models.attention import attention_posterior
+from keyin.models.recurrent import LSTMBlock, init_forget_bias
+
+OFFSET_MODES = ("predicted", "static", "fixed")
+MODES = ("posterior", "prior")
+# Logit of the impossible offsets in "fixed" mode: softmax gives an exact one-hot, and unlike −∞ it
+# keeps log-softmax and entropy (0 · log 0) finite.
+FIXED_OFFSET_OFF_LOGIT = -1.0e4
+
+
+class KeyframeOutput(NamedTuple):
+    """What the keyframe predictor produces for M keyframes.
+
+    Attributes:
+        key_emb: (B, M, E) keyframe embeddings K̂^{e,t}, t = 1…M, in (-1, 1).
+        offset_probs: (B, M, S) δ^t; entry a is the probability of offset a + 1.
+        offset_logits: (B, M, S) logits of δ^t.
+        mu: (B, M, Zk) posterior means (zeros in prior mode).
+        log_sigma: (B, M, Zk) posterior log standard deviations (zeros in prior mode).
+        z: (B, M, Zk) the latents fed to LSTM_key.
+        attention: (B, M, N) attention weights α over the future frames; None in prior mode.
+    """
+
+    key_emb: Tensor
+    offset_probs: Tensor
+    offset_logits: Tensor
+    mu: Tensor
+    log_sigma: Tensor
+    z: Tensor
+    attention: Tensor | None
+
+
+class KeyframePredictor(nn.Module):
+    """Predicts M keyframe embeddings and their offset distributions (REFERENCE §2.4 steps 2-4).
+
+    LSTM_cond runs over the conditioning embeddings; its final state initialises LSTM_key
+    (Init_key = Final_cond, so both share `hidden` and `layers`). In posterior mode a bidirectional
+    LSTM_inf reads the future embeddings and emits a key (E) and a value [μ, log σ] (2Zk) per frame;
+    keyframe t attends with the query K̂^{e,t-1} (K^{e,0} = the last conditioning embedding). LSTM_key
+    reads [z^t, K̂^{e,t-1}] and emits K̂^{e,t} = tanh(Linear) and the offset logits.
+
+    Args:
+        embed_dim: E.
+        n_keyframes: M.
+        max_offset: S.
+        latent_dim: Zk.
+        hidden: hidden size per layer of every LSTM.
+        layers: number of layers of every LSTM.
+        attn_scale: divide attention scores by √E and learn an inverse temperature (init 1);
+            False is the paper's plain inner product.
+        offset_mode: "predicted" (KEYIN: softmax of a head on LSTM_key), "static" (learned logits
+            (M, S) shared by all sequences: the Static baseline), "fixed" (one-hot at
+            `fixed_offset` for every keyframe: the Jumpy baseline).
+        fixed_offset: the constant offset in 1…S; required by, and only allowed with, "fixed".
+    """
+
+    def __init__(
+        self,
+        embed_dim: int,
+        n_keyframes: int,
+        max_offset: int,
+        latent_dim: int,
+        hidden: int,
+        layers: int,
+        attn_scale: bool = True,
+        offset_mode: str = "predicted",
+        fixed_offset: int | None = None,
+    ) -> None:
+        super().__init__()
+        if offset_mode not in OFFSET_MODES:
+            raise ValueError(f"offset_mode must be one of {OFFSET_MODES}, got {offset_mode!r}")
+        if (offset_mode == "fixed") != (fixed_offset is not None):
+            raise ValueError("fixed_offset is required by offset_mode='fixed' and only allowed with it")
+        if fixed_offset is not None and not 1 <= fixed_offset <= max_offset:
+            raise ValueError(f"fixed_offset must be in 1..max_offset={max_offset}, got {fixed_offset}")
+        self.embed_dim = embed_dim
+        self.n_keyframes = n_keyframes
+        self.max_offset = max_offset
+        self.latent_dim = latent_dim
+        self.attn_scale = attn_scale
+        self.offset_mode = offset_mode
+        self.fixed_offset = fixed_offset
+
+        # Only the final state of LSTM_cond is used, so it has no output projection.
+        self.cond_lstm = LSTMBlock(embed_dim, None, hidden, layers)
+
+        self.inference_projection = nn.Linear(embed_dim, hidden)
+        self.inference_lstm = nn.LSTM(hidden, hidden, num_layers=layers, batch_first=True, bidirectional=True)
+        init_forget_bias(self.inference_lstm)
+        self.inference_key_head = nn.Linear(2 * hidden, embed_dim)
+        self.inference_value_head = nn.Linear(2 * hidden, 2 * latent_dim)
+        if attn_scale:
+            self.attention_inv_temperature = nn.Parameter(torch.tensor(1.0))
+        else:
+            self.register_parameter("attention_inv_temperature", None)
+
+        self.key_lstm = LSTMBlock(latent_dim + embed_dim, None, hidden, layers, learn_initial_state=False)
+        self.key_head = nn.Linear(hidden, embed_dim)
+        # Unused offset parameters would get no gradient (and break DDP), so each mode builds only its own.
+        self.offset_head = nn.Linear(hidden, max_offset) if offset_mode == "predicted" else None
+        if offset_mode == "static":
+            self.static_offset_logits = nn.Parameter(torch.zeros(n_keyframes, max_offset))
+        else:
+            self.register_parameter("static_offset_logits", None)
+
+    def infer(self, future_emb: Tensor, lengths: Tensor | None) -> tuple[Tensor, Tensor, Tensor]:
+        """LSTM_inf: attention keys and values for every future frame.
+
+        With `lengths`, the sequences are packed so that frames beyond a clip's length influence
+        nothing (the backward direction starts at the last valid frame).
+
+        Args:
+            future_emb: (B, N, E).
+            lengths: (B,) valid lengths in 0…N, or None if all N frames are valid.
+        Returns:
+            keys (B, N, E), values (B, N, 2Zk), mask (B, N) bool (True = valid).
+        """
+        batch_size, n_frames, _ = future_emb.shape
+        projected = self.inference_projection(future_emb)  # (B, N, hidden)
+        if lengths is None:
+            features, _ = self.inference_lstm(projected)  # (B, N, 2·hidden)
+            mask = torch.ones(batch_size, n_frames, dtype=torch.bool, device=future_emb.device)
+        else:
+            # Packing needs lengths ≥ 1 on the CPU; an empty clip's single dummy frame stays masked.
+            packed = pack_padded_sequence(
+                projected, lengths.clamp(min=1).cpu(), batch_first=True, enforce_sorted=False
+            )
+            packed_features, _ = self.inference_lstm(packed)
+            features, _ = pad_packed_sequence(packed_features, batch_first=True, total_length=n_frames)
+            mask = torch.arange(n_frames, device=future_emb.device) < lengths.to(future_emb.device)[:, None]
+        keys = self.inference_key_head(features)  # (B, N, E)
+        values = self.inference_value_head(features)  # (B, N, 2Zk)
+        return keys, values, mask
+
+    def _offset_logits(self, hidden_outputs: Tensor) -> Tensor:
+        """Offset logits of every keyframe for the configured offset mode.
+
+        Args:
+            hidden_outputs: (B, M, hidden) LSTM_key outputs.
+        Returns:
+            (B, M, S).
+        """
+        batch_size = hidden_outputs.shape[0]
+        if self.offset_mode == "predicted":
+            return self.offset_head(hidden_outputs)
+        if self.offset_mode == "static":
+            return self.static_offset_logits.expand(batch_size, -1, -1)
+        logits = hidden_outputs.new_full((self.max_offset,), FIXED_OFFSET_OFF_LOGIT)  # (S,)
+        logits[self.fixed_offset - 1] = 0.0
+        return logits.expand(batch_size, self.n_keyframes, -1)
+
+    def forward(
+        self,
+        cond_emb: Tensor,
+        future_emb: Tensor | None = None,
+        lengths: Tensor | None = None,
+        mode: str = "posterior",
+        sample: bool = True,
+        z: Tensor | None = None,
+    ) -> KeyframeOutput:
+        """Predict the keyframes.
+
+        Args:
+            cond_emb: (B, T, E) conditioning embeddings; the last one is K^{e,0}.
+            future_emb: (B, N, E) future embeddings; required in posterior mode, ignored in prior mode.
+            lengths: (B,) valid future lengths (posterior mode); None means all N are valid.
+            mode: "posterior" (z^t from the attention posterior, training) or "prior" (z^t ~ N(0, I)).
+            sample: draw z^t; False uses the mean (μ^t in posterior mode, 0 in prior mode).
+            z: (B, M, Zk) latents to use in prior mode (the CEM planner's), overriding `sample`.
+        Returns:
+            KeyframeOutput.
+        """
+        if mode not in MODES:
+            raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+        if mode == "posterior" and future_emb is None:
+            raise ValueError("posterior mode needs future_emb")
+        if mode == "posterior" and z is not None:
+            raise ValueError("z can only be given in prior mode")
+        batch_size = cond_emb.shape[0]
+        latent_shape = (batch_size, self.n_keyframes, self.latent_dim)
+        if z is not None and tuple(z.shape) != latent_shape:
+            raise ValueError(f"z must have shape {latent_shape}, got {tuple(z.shape)}")
+
+        _, state = self.cond_lstm(cond_emb)  # Init_key = Final_cond: (h, c), each (layers, B, hidden)
+        previous_key = cond_emb[:, -1]  # K^{e,0}: (B, E)
+        if mode == "posterior":
+            keys, values, mask = self.infer(future_emb, lengths)  # (B, N, E), (B, N, 2Zk), (B, N)
+            inv_temperature = self.attention_inv_temperature if self.attn_scale else 1.0
+        else:
+            prior_z = z
+            if prior_z is None:
+                prior_z = cond_emb.new_zeros(latent_shape)
+                if sample:
+                    prior_z = torch.randn_like(prior_z)
+
+        key_embs, hidden_outputs, mus, log_sigmas, latents, attentions = [], [], [], [], [], []
+        for t in range(self.n_keyframes):
+            if mode == "posterior":
+                mu, log_sigma, weights = attention_posterior(
+                    previous_key, keys, values, mask, inv_temperature, self.attn_scale
+                )  # (B, Zk), (B, Zk), (B, N)
+                latent = mu + log_sigma.exp() * torch.randn_like(mu) if sample else mu
+                attentions.append(weights)
+            else:
+                latent = prior_z[:, t]  # (B, Zk)
+                mu = log_sigma = torch.zeros_like(latent)
+            hidden_output, state = self.key_lstm.step(torch.cat([latent, previous_key], dim=-1), state)
+            previous_key = torch.tanh(self.key_head(hidden_output))  # K̂^{e,t}: (B, E)
+            key_embs.append(previous_key)
+            hidden_outputs.append(hidden_output)
+            mus.append(mu)
+            log_sigmas.append(log_sigma)
+            latents.append(latent)
+
+        offset_logits = self._offset_logits(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
+        return KeyframeOutput(
+            key_emb=torch.stack(key_embs, dim=1),  # (B, M, E)
+            offset_probs=torch.softmax(offset_logits, dim=-1),  # (B, M, S)
+            offset_logits=offset_logits,
+            mu=torch.stack(mus, dim=1),  # (B, M, Zk)
+            log_sigma=torch.stack(log_sigmas, dim=1),
+            z=torch.stack(latents, dim=1),
+            attention=torch.stack(attentions, dim=1) if attentions else None,  # (B, M, N)
+        )
