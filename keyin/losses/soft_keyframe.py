@@ -1,0 +1,288 @@
+"""KEYIN's soft keyframe loss (paper Algorithm 2, eq. 3-5) as vectorised tensor operations.
+
+Index conventions follow REFERENCE §1: ``offset_probs[..., a]`` is the probability of offset
+``a + 1``; keyframe ``K^0`` sits at position -1; the future frames ``I_0 ... I_{N-1}`` sit at
+positions ``0 ... N-1``. Every distribution over positions is stored on the *extended index*
+``k = position + 1`` (``k = 0`` is ``K^0``), of length ``L_ext = M * S + 1`` (REFERENCE §3.2).
+
+Clips may have different valid lengths ``n_b <= N`` (``lengths``); positions ``>= n_b`` are
+excluded from ``c^t``, from the keyframe targets and from ``L_inter`` (REFERENCE §3.8).
+"""
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+PROB_EPS = 1e-6
+"""Clamp of BCE probabilities, coverage and ``c^t`` normalisers (REFERENCE §3.5, §8.12)."""
+
+
+def position_distributions(offset_probs: Tensor) -> tuple[Tensor, Tensor]:
+    """Keyframe and per-frame position distributions by shift-and-weight (REFERENCE §3.2, §3.5).
+
+    With ``X^t[b, a, k] = D^{t-1}[b, k - a - 1]`` (``D^0 = onehot(k = 0)``):
+    ``D^t = Σ_a δ^t[a] X^t[a]`` and ``Wt^t[i] = e^t[i] X^t[i]`` with ``e^t[i] = P(o^t >= i + 1)``.
+
+    Args:
+        offset_probs: (B, M, S); entry a is the probability of offset a + 1.
+    Returns:
+        keyframe_pos: (B, M, L_ext); ``[b, t-1, k]`` = P(keyframe t sits at extended index k).
+        frame_pos: (B, M, S, L_ext); ``[b, t-1, i, k]`` = P(output i of segment t exists and sits
+            at extended index k).
+    """
+    batch, n_keys, max_offset = offset_probs.shape
+    n_ext = n_keys * max_offset + 1
+    # e^t[i] = Σ_{a >= i} δ^t[a]: reverse cumulative sum over offsets.
+    exist_probs = offset_probs.flip(-1).cumsum(-1).flip(-1)
+    previous_pos = offset_probs.new_zeros(batch, n_ext)
+    previous_pos[:, 0] = 1.0  # D^0: K^0 at position -1
+    keyframe_pos, shifted_stack = [], []
+    for key in range(n_keys):
+        # windows[b, k, s] = padded[b, k + s] = D^{t-1}[b, k + s - S]; flipping s gives
+        # shifted[b, k, a] = D^{t-1}[b, k - a - 1] (zero where k - a - 1 < 0).
+        padded = F.pad(previous_pos, (max_offset, 0))
+        windows = padded.unfold(-1, max_offset, 1)[:, :n_ext]
+        shifted = windows.flip(-1).transpose(-1, -2)  # (B, S, L_ext)
+        previous_pos = torch.einsum("bak,ba->bk", shifted, offset_probs[:, key])
+        keyframe_pos.append(previous_pos)
+        shifted_stack.append(shifted)
+    frame_pos = torch.stack(shifted_stack, dim=1) * exist_probs[..., None]
+    return torch.stack(keyframe_pos, dim=1), frame_pos
+
+
+def _future_window(extended: Tensor, n_future: int) -> Tensor:
+    """Extended indices 1 ... N (positions 0 ... N-1) of the last dimension (REFERENCE §3.4)."""
+    if extended.shape[-1] < n_future + 1:
+        raise ValueError(
+            f"M*S = {extended.shape[-1] - 1} positions cannot cover N = {n_future} future frames; "
+            "REFERENCE §1 requires M*S >= N"
+        )
+    return extended[..., 1 : n_future + 1]
+
+
+def valid_frame_mask(lengths: Tensor, n_future: int) -> Tensor:
+    """Which future positions lie inside each clip (REFERENCE §3.8).
+
+    Args:
+        lengths: (B,) int, valid future frames n_b <= N.
+        n_future: N.
+    Returns:
+        (B, N) bool, True at positions j < n_b.
+    """
+    positions = torch.arange(n_future, device=lengths.device)
+    return positions < lengths[:, None]
+
+
+def _inside_keyframe_pos(keyframe_pos: Tensor, lengths: Tensor, n_future: int) -> Tensor:
+    """``D^t`` on positions 0 ... n_b - 1: (B, M, L_ext) → (B, M, N) (REFERENCE §3.4)."""
+    frame_mask = valid_frame_mask(lengths, n_future)
+    return _future_window(keyframe_pos, n_future) * frame_mask[:, None, :]
+
+
+def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:
+    """Probability ``c^t`` that keyframe t lies inside the clip (REFERENCE §3.3).
+
+    Args:
+        keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
+        lengths: (B,) int, valid future frames n_b.
+    Returns:
+        (B, M) ``c^t = Σ_{k=1}^{n_b} D^t[k]``.
+    """
+    future_pos = keyframe_pos[..., 1:]  # drop k = 0 (K^0): positions 0 ... M*S-1
+    return (future_pos * valid_frame_mask(lengths, future_pos.shape[-1])[:, None, :]).sum(-1)
+
+
+def soft_keyframe_targets(
+    keyframe_pos: Tensor, lengths: Tensor, future: Tensor, normalize: bool
+) -> Tensor:
+    """Expected ground-truth keyframes ``K̃^t = Σ_{j<n_b} D^t[j+1] future_j`` (REFERENCE §3.4).
+
+    Args:
+        keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
+        lengths: (B,) int, valid future frames n_b.
+        future: (B, N, D) future-frame embeddings or flattened images; entries at positions
+            >= n_b are ignored (they may hold anything, NaN included).
+        normalize: divide by ``max(c^t, 1e-6)`` (expectation given "inside"; our default) instead
+            of the paper's unnormalised sum.
+    Returns:
+        (B, M, D) soft targets.
+    """
+    n_future = future.shape[1]
+    inside_pos = _inside_keyframe_pos(keyframe_pos, lengths, n_future)
+    frame_mask = valid_frame_mask(lengths, n_future)
+    # A fill, not a product: 0 * NaN padding would still be NaN.
+    future = future.masked_fill(~frame_mask[..., None], 0.0)
+    targets = torch.bmm(inside_pos, future)
+    if normalize:
+        targets = targets / inside_pos.sum(-1, keepdim=True).clamp_min(PROB_EPS)
+    return targets
+
+
+def soft_frames(
+    frame_pos: Tensor, predicted: Tensor, n_future: int, eps: float = PROB_EPS
+) -> tuple[Tensor, Tensor]:
+    """Mix the interpolator's outputs into one expected frame per position (REFERENCE §3.5).
+
+    Each position's mixture depends only on the outputs that can land there, so clip lengths play
+    no role here: positions >= n_b are dropped by the loss.
+
+    Args:
+        frame_pos: (B, M, S, L_ext) from :func:`position_distributions`.
+        predicted: (B, M, S, D) interpolated frames ``Î^t_i`` (probabilities or embeddings).
+        n_future: N, the number of future positions to produce.
+        eps: lower clamp of the coverage denominator.
+    Returns:
+        mixed: (B, N, D) ``Ĩ_j = Σ_{t,i} Wt[t,i,j+1] Î^t_i / max(cov_j, eps)``; 0 where
+            cov_j = 0.
+        coverage: (B, N) ``cov_j = P(p^M >= j)``, the probability that position j is predicted.
+    """
+    batch, n_keys, max_offset, n_pixels = predicted.shape
+    frame_weights = _future_window(frame_pos, n_future).reshape(
+        batch, n_keys * max_offset, n_future
+    )
+    coverage = frame_weights.sum(1)
+    # Normalising the (B, M·S, N) weights instead of the (B, N, D) product saves a pass over D.
+    mixing_weights = frame_weights / coverage.clamp_min(eps)[:, None, :]
+    mixed = torch.bmm(
+        mixing_weights.transpose(1, 2), predicted.reshape(batch, n_keys * max_offset, n_pixels)
+    )
+    return mixed, coverage
+
+
+def gaussian_kl(mu: Tensor, log_sigma: Tensor) -> Tensor:
+    """KL(N(mu, sigma^2) || N(0, I)) summed over the last dimension (REFERENCE §3.6).
+
+    Args:
+        mu: (..., Z) means.
+        log_sigma: (..., Z) log standard deviations.
+    Returns:
+        (...) ``Σ_z [-log σ + (σ² + μ²) / 2 - 1/2]``.
+    """
+    return (-log_sigma + 0.5 * (torch.exp(2 * log_sigma) + mu**2) - 0.5).sum(-1)
+
+
+def bce_sum(probs: Tensor, targets: Tensor, mask: Tensor | None = None) -> Tensor:
+    """Binary cross-entropy on probabilities, summed over pixels (REFERENCE §3.6, §8.6, §8.12).
+
+    Probabilities are clamped to [1e-6, 1 - 1e-6]; mixtures of sigmoid outputs have no logits, so
+    the logits form cannot be used.
+
+    Args:
+        probs: (..., F, D) predicted probabilities.
+        targets: (..., F, D) targets in [0, 1]; masked frames may hold anything.
+        mask: (..., F) bool, frames that count; None keeps all.
+    Returns:
+        (..., F) per-frame BCE summed over D; 0 at masked frames.
+    """
+    probs = probs.clamp(PROB_EPS, 1 - PROB_EPS)
+    if mask is not None:
+        # Padding may hold anything; a NaN there would reach the gradient as 0 * NaN.
+        targets = targets.masked_fill(~mask[..., None], 0.0)
+    # y log p + (1 - y) log(1 - p) rearranged to save two full passes over the pixels.
+    log_not_probs = torch.log1p(-probs)
+    per_frame = -(log_not_probs + targets * (torch.log(probs) - log_not_probs)).sum(-1)
+    if mask is not None:
+        per_frame = per_frame.masked_fill(~mask, 0.0)
+    return per_frame
+
+
+def _at_least_float32(tensor: Tensor) -> Tensor:
+    """Upcast half/bfloat16 to float32 and keep float64 (REFERENCE §3.8: mixed precision)."""
+    return tensor if tensor.dtype in (torch.float32, torch.float64) else tensor.float()
+
+
+def keyin_loss(
+    offset_probs: Tensor,
+    key_emb_pred: Tensor,
+    future_emb: Tensor,
+    inter_frames_pred: Tensor,
+    future_frames: Tensor,
+    kl_per_key: Tensor,
+    lengths: Tensor,
+    beta_ke: float,
+    beta_ki: float,
+    beta_kl: float,
+    normalize_key_targets: bool = True,
+    key_frames_pred: Tensor | None = None,
+) -> dict[str, Tensor]:
+    """KEYIN stage-2 loss ``L_key + L_inter`` (paper eq. 3-5, REFERENCE §3.6).
+
+    ``L_key = Σ_t c^t (β_ki ℓ_ki^t + β_ke ℓ_ke^t + β_KL ℓ_KL^t) / Σ_t c^t`` with
+    ``ℓ_ke^t = ‖K̂^{e,t} - K̃^{e,t}‖²`` and ``ℓ_ki^t = BCE_sum(K̂^t, K̃^t)``;
+    ``L_inter = Σ_{j<n_b} BCE_sum(Ĩ_j, I_j)``. Sums over pixels, dims and frames; mean over the
+    batch. Runs outside autocast, in float32 (float64 inputs stay float64).
+
+    Args:
+        offset_probs: (B, M, S) offset distributions δ; entry a is offset a + 1.
+        key_emb_pred: (B, M, E) predicted keyframe embeddings K̂^{e,t}.
+        future_emb: (B, N, E) embeddings of the future frames.
+        inter_frames_pred: (B, M, S, D) interpolated frames Î^t_i as probabilities, D = C·H·W.
+        future_frames: (B, N, D) ground-truth future frames in [0, 1].
+        kl_per_key: (B, M) ℓ_KL^t, e.g. from :func:`gaussian_kl`.
+        lengths: (B,) int, valid future frames n_b <= N.
+        beta_ke: weight of the embedding term.
+        beta_ki: weight of the keyframe-image term; needs ``key_frames_pred`` when > 0.
+        beta_kl: weight of the KL term.
+        normalize_key_targets: divide the soft keyframe targets by c^t (REFERENCE §3.4).
+        key_frames_pred: (B, M, D) decoded keyframes K̂^t as probabilities.
+    Returns:
+        ``loss`` (scalar); batch means ``key`` (L_key), ``key_emb``, ``kl``, ``inter`` (L_inter)
+        and, if beta_ki > 0, ``key_img`` — the terms are c-weighted averages over keyframes and
+        carry no β; ``c`` (B, M); ``coverage`` (B, N); ``soft_frames`` (B, N, D) = Ĩ.
+    """
+    if beta_ki > 0 and key_frames_pred is None:
+        raise ValueError("beta_ki > 0 needs key_frames_pred")
+    with torch.autocast(device_type=offset_probs.device.type, enabled=False):
+        offset_probs = _at_least_float32(offset_probs)
+        key_emb_pred = _at_least_float32(key_emb_pred)
+        future_emb = _at_least_float32(future_emb)
+        inter_frames_pred = _at_least_float32(inter_frames_pred)
+        future_frames = _at_least_float32(future_frames)
+        kl_per_key = _at_least_float32(kl_per_key)
+        n_future = future_frames.shape[1]
+
+        keyframe_pos, frame_pos = position_distributions(offset_probs)
+        in_sequence = in_sequence_probs(keyframe_pos, lengths)
+        # Σ_t c^t >= c^1 = 1 for full clips, but clips shorter than S can make it small (§3.3).
+        key_weights = in_sequence / in_sequence.sum(-1, keepdim=True).clamp_min(PROB_EPS)
+
+        emb_targets = soft_keyframe_targets(
+            keyframe_pos, lengths, future_emb, normalize_key_targets
+        )
+        key_emb_terms = ((key_emb_pred - emb_targets) ** 2).sum(-1)  # (B, M)
+        per_key = beta_ke * key_emb_terms + beta_kl * kl_per_key
+        terms = {"key_emb": key_emb_terms, "kl": kl_per_key}
+        if beta_ki > 0:
+            img_targets = soft_keyframe_targets(
+                keyframe_pos, lengths, future_frames, normalize_key_targets
+            )
+            key_img_terms = bce_sum(_at_least_float32(key_frames_pred), img_targets)
+            per_key = per_key + beta_ki * key_img_terms
+            terms["key_img"] = key_img_terms
+        key_loss = (key_weights * per_key).sum(-1)  # (B,)
+
+        mixed, coverage = soft_frames(frame_pos, inter_frames_pred, n_future)
+        inter_loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future)).sum(-1)
+
+        result = {name: (key_weights * term).sum(-1).mean() for name, term in terms.items()}
+        result.update(
+            loss=(key_loss + inter_loss).mean(),
+            key=key_loss.mean(),
+            inter=inter_loss.mean(),
+            c=in_sequence,
+            coverage=coverage,
+            soft_frames=mixed,
+        )
+    return result
+
+
+def argmax_positions(offset_probs: Tensor) -> Tensor:
+    """Most likely position of each keyframe, from argmax offsets (REFERENCE §1, §3.9).
+
+    Args:
+        offset_probs: (B, M, S); entry a is the probability of offset a + 1.
+    Returns:
+        (B, M) positions ``p^t = -1 + Σ_{s<=t} (argmax δ^s + 1)``; -1 is the last conditioning
+        frame.
+    """
+    return (offset_probs.argmax(dim=-1) + 1).cumsum(dim=-1) - 1
