@@ -1,0 +1,175 @@
+"""Stage 2: the keyframe predictor trained through the frozen interpolator (REFERENCE §2.4, §2.7-2.8).
+
+The encoder, decoder and interpolator of stage 1 are frozen (``requires_grad=False`` and
+``.eval()``, re-asserted at every epoch and batch start) but gradients flow *through* them into
+the keyframe predictor: LSTM_cond, LSTM_inf with the attention posterior, and LSTM_key with its
+keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import lightning as L
+import torch
+
+from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss
+from keyin.lit.interpolator import InterpolatorModule
+from keyin.models import KeyframePredictor
+
+FROZEN = ("encoder", "decoder", "interpolator")
+
+
+class KeyframeModule(L.LightningModule):
+    """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``)."""
+
+    stage = "keyframes"
+
+    def __init__(
+        self,
+        stage1: dict[str, Any],
+        n_keyframes: int,
+        latent_dim: int,
+        lstm_hidden: int,
+        lstm_layers: int,
+        attn_scale: bool,
+        offset_mode: str,
+        fixed_offset: int | None,
+        beta_ke: float,
+        beta_ki: float,
+        beta_kl: float,
+        normalize_key_targets: bool,
+        lr: float,
+    ) -> None:
+        super().__init__()
+        self.save_hyperparameters()
+        frozen = InterpolatorModule(**stage1)
+        self.encoder, self.decoder, self.interpolator = frozen.encoder, frozen.decoder, frozen.interpolator
+        self.predictor = KeyframePredictor(
+            embed_dim=stage1["embed_dim"],
+            n_keyframes=n_keyframes,
+            max_offset=stage1["max_offset"],
+            latent_dim=latent_dim,
+            hidden=lstm_hidden,
+            layers=lstm_layers,
+            attn_scale=attn_scale,
+            offset_mode=offset_mode,
+            fixed_offset=fixed_offset,
+        )
+        self.freeze_stage1()
+
+    def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
+        """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
+        for name in FROZEN:
+            prefix = f"{name}."
+            part = {k[len(prefix) :]: v for k, v in state_dict.items() if k.startswith(prefix)}
+            getattr(self, name).load_state_dict(part)
+
+    def freeze_stage1(self) -> None:
+        for name in FROZEN:
+            module = getattr(self, name)
+            module.requires_grad_(False)
+            module.eval()
+
+    def on_train_epoch_start(self) -> None:
+        self.freeze_stage1()
+
+    def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
+        # Lightning puts every module back in train mode after validation (REFERENCE §8.1).
+        self.freeze_stage1()
+
+    def forward(
+        self, clips: torch.Tensor, future_length: torch.Tensor, mode: str = "posterior", sample: bool = True
+    ) -> dict[str, torch.Tensor]:
+        """Keyframes, offsets and interpolated frames of a batch of clips.
+
+        Args:
+            clips: (B, L, C, H, W) in [0, 1], L = n_cond + n_future.
+            future_length: (B,) valid future frames.
+        Returns:
+            ``key_emb`` (B, M, E), ``offset_probs`` (B, M, S), ``mu``/``log_sigma`` (B, M, Zk),
+            ``attention`` (B, M, N), ``future_emb`` (B, N, E), ``frames`` (B, M, S, C·H·W)
+            probabilities of the interpolated frames.
+        """
+        n_cond = self.hparams.stage1["n_cond"]
+        embeddings = self.encoder(clips)  # (B, L, E)
+        cond_emb, future_emb = embeddings[:, :n_cond], embeddings[:, n_cond:]
+        keys = self.predictor(cond_emb, future_emb, future_length, mode=mode, sample=sample)
+        starts = torch.cat([cond_emb[:, -1:], keys.key_emb[:, :-1]], dim=1)  # (B, M, E)
+        n_clips, n_keys, max_offset = keys.offset_probs.shape
+        latent = torch.randn(
+            n_clips * n_keys, self.interpolator.latent_dim, device=clips.device
+        )  # stage 2 samples the interpolator latent from the prior (paper §3.2)
+        inter_emb = self.interpolator(
+            starts.flatten(0, 1), keys.key_emb.flatten(0, 1), keys.offset_probs.flatten(0, 1), latent
+        )  # (B·M, S, E)
+        frames = torch.sigmoid(self.decoder(inter_emb.flatten(0, 1)))  # (B·M·S, C, H, W)
+        return {
+            "key_emb": keys.key_emb,
+            "offset_probs": keys.offset_probs,
+            "mu": keys.mu,
+            "log_sigma": keys.log_sigma,
+            "attention": keys.attention,
+            "future_emb": future_emb,
+            "frames": frames.reshape(n_clips, n_keys, max_offset, -1),
+        }
+
+    def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> dict[str, torch.Tensor]:
+        clips, future_length = batch["frames"], batch["future_length"]
+        n_cond = self.hparams.stage1["n_cond"]
+        out = self(clips, future_length)
+        terms = keyin_loss(
+            offset_probs=out["offset_probs"],
+            key_emb_pred=out["key_emb"],
+            future_emb=out["future_emb"],
+            inter_frames_pred=out["frames"],
+            future_frames=clips[:, n_cond:].flatten(2),
+            kl_per_key=gaussian_kl(out["mu"], out["log_sigma"]),
+            lengths=future_length,
+            beta_ke=self.hparams.beta_ke,
+            beta_ki=self.hparams.beta_ki,
+            beta_kl=self.hparams.beta_kl,
+            normalize_key_targets=self.hparams.normalize_key_targets,
+        )
+        entropy = -(out["offset_probs"] * out["offset_probs"].clamp_min(1e-12).log()).sum(-1)
+        self.log_dict(
+            {
+                f"{stage}/loss": terms["loss"],
+                f"{stage}/inter": terms["inter"].mean(),
+                f"{stage}/key_emb": terms["key_emb"].mean(),
+                f"{stage}/kl": terms["kl"].mean(),
+                f"{stage}/offset_entropy": entropy.mean(),
+                f"{stage}/n_inside": terms["c"].sum(-1).mean(),
+                f"{stage}/coverage_end": terms["coverage"][:, -1].mean(),
+            },
+            prog_bar=stage == "train",
+        )
+        return terms
+
+    def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
+        return self._shared_step(batch, "train")["loss"]
+
+    def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
+        self._shared_step(batch, "val")
+
+    @torch.no_grad()
+    def discover(self, clips: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
+        """Keyframe positions: posterior mean, argmax offsets, positions inside each clip (§3.9)."""
+        was_training = self.training
+        self.eval()
+        embeddings = self.encoder(clips.to(self.device))
+        n_cond = self.hparams.stage1["n_cond"]
+        keys = self.predictor(
+            embeddings[:, :n_cond], embeddings[:, n_cond:], future_length.to(self.device),
+            mode="posterior", sample=False,
+        )
+        positions = argmax_positions(keys.offset_probs).cpu()
+        self.train(was_training)
+        self.freeze_stage1()
+        return [
+            [p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())
+        ]
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        trainable = [p for p in self.parameters() if p.requires_grad]
+        return torch.optim.Adam(trainable, lr=self.hparams.lr, betas=(0.9, 0.999))

@@ -1,0 +1,61 @@
+"""Fit one training stage into a run dir: checkpoints, resume, config in checkpoint, NaN guard."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Mapping
+
+import lightning as L
+from lightning.pytorch.callbacks import ModelCheckpoint
+
+from keyin.errors import KeyinError
+from keyin.lit.checkpoints import RunConfigInCheckpoint
+
+
+class FiniteLoss(L.Callback):
+    """Stop at the first non-finite loss; the last checkpoint on disk stays the last good one."""
+
+    def on_train_batch_end(self, trainer: L.Trainer, module, outputs, batch, batch_idx: int) -> None:
+        loss = outputs["loss"] if isinstance(outputs, Mapping) else outputs
+        if not math.isfinite(float(loss)):
+            raise KeyinError(
+                f"non-finite loss {float(loss)} at step {trainer.global_step}, batch {batch_idx}; "
+                f"the last good checkpoint is in {trainer.default_root_dir}/checkpoints/"
+                f"{module.stage}/ — lower the learning rate and resume"
+            )
+
+
+def fit_stage(
+    module: L.LightningModule,
+    datamodule: L.LightningDataModule,
+    run_dir: Path,
+    max_steps: int,
+    val_every: int,
+    checkpoint_every: int,
+    trainer_kwargs: Mapping[str, Any],
+    logger: Any,
+    config: dict[str, Any],
+) -> Path:
+    """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present.
+
+    Returns:
+        The path of the stage's last checkpoint.
+    """
+    folder = Path(run_dir) / "checkpoints" / module.stage
+    last = folder / "last.ckpt"
+    checkpoints = ModelCheckpoint(
+        dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=checkpoint_every
+    )
+    trainer = L.Trainer(
+        **trainer_kwargs,
+        max_steps=max_steps,
+        val_check_interval=val_every,
+        check_val_every_n_epoch=None,
+        logger=logger,
+        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss()],
+        default_root_dir=str(run_dir),
+    )
+    trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last.is_file() else None)
+    trainer.save_checkpoint(last)  # the final state, whatever the checkpoint cadence
+    return last
