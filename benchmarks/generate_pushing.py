@@ -1,0 +1,143 @@
+"""Pushing-demo generation speed against its ceiling (physics-only and render-only rates).
+
+    python benchmarks/generate_pushing.py --clips 40 --workers 2 \
+        --out benchmarks/results/generate_pushing.md
+
+Measures, in this order and one at a time:
+1. physics only: the demonstrator's attempts (accepted or not) per second, no rendering;
+2. render only: 64x64 frames per second from recorded physics states (1 and 2: best of 3 runs);
+3. ``PushingGenerator.generate`` per second in one process (physics + rejections + rendering);
+4. the project's writer (``keyin.data.generate.generate_dataset``) with ``--workers`` spawn
+   workers, HDF5 shards included.
+The single-process ceiling is ``1 / (attempts per clip * s per attempt + frames per clip * s per
+frame)``; ``workers`` processes can at best multiply it by ``min(workers, cores)``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from keyin.data.generate import generate_dataset
+from keyin.data.pushing import PushingGenerator
+from keyin.envs.demonstrator import run_demo
+
+
+def cpu_model() -> str:
+    try:
+        lines = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines()
+    except (OSError, subprocess.CalledProcessError):
+        return platform.processor() or "unknown"
+    names = [line.split(":", 1)[1].strip() for line in lines if line.startswith("Model name")]
+    return names[0] if names else "unknown"
+
+
+REPEATS = 3  # the ceiling rates are the best of this many runs (the machine may be shared)
+
+
+def physics_rate(generator: PushingGenerator, attempts: int) -> tuple[float, float]:
+    """(attempts per second, acceptance rate) of the demonstrator without rendering."""
+    env = generator.environment()
+    _, sampler, params = generator._parts()
+    best = np.inf
+    for _ in range(REPEATS):
+        accepted = 0
+        start = time.perf_counter()
+        for index in range(attempts):
+            rng = np.random.default_rng(np.random.SeedSequence(10_000 + index))
+            accepted += run_demo(env, sampler.sample(rng), rng, params) is not None
+        best = min(best, time.perf_counter() - start)
+    return attempts / best, accepted / attempts
+
+
+def render_rate(generator: PushingGenerator, frames: int) -> float:
+    """Rendered frames per second from the states of one recorded demo."""
+    demo, _ = generator.demo(0, 0)
+    states = demo.states[np.arange(frames) % len(demo.states)]
+    generator.render_states(states[:2])  # create the GL context outside the timing
+    best = np.inf
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        generator.render_states(states)
+        best = min(best, time.perf_counter() - start)
+    return frames / best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clips", type=int, default=40)
+    parser.add_argument("--attempts", type=int, default=60)
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=None)
+    args = parser.parse_args()
+    generator = PushingGenerator()
+    load_before = os.getloadavg()
+
+    attempts_per_s, acceptance = physics_rate(generator, args.attempts)
+    frames_per_s = render_rate(generator, args.frames)
+    start, attempts = time.perf_counter(), 0
+    for index in range(args.clips):
+        attempts += generator.generate(index, 1000)[1]
+    serial = args.clips / (time.perf_counter() - start)
+    with tempfile.TemporaryDirectory() as folder:
+        stats = generate_dataset(
+            generator, Path(folder), "pushing", {"train": args.clips}, shard_size=max(1, args.clips // 4),
+            seed=0, workers=args.workers, progress=False,
+        )
+    load_after = os.getloadavg()
+
+    clip_frames = generator.clip_length
+    attempts_per_clip = attempts / args.clips
+    ceiling = 1.0 / (attempts_per_clip / attempts_per_s + clip_frames / frames_per_s)
+    rows = [
+        ("physics only: demonstrator attempts / s (no rendering)", f"{attempts_per_s:.1f}"),
+        ("acceptance rate in that run", f"{acceptance:.0%}"),
+        ("render only: 64x64 frames / s", f"{frames_per_s:.0f}"),
+        (f"ceiling, 1 process: 1 / ({attempts_per_clip:.2f} attempts / {attempts_per_s:.1f} + "
+         f"{clip_frames} frames / {frames_per_s:.0f}) clips / s", f"{ceiling:.2f}"),
+        ("`PushingGenerator.generate`, 1 process: clips / s", f"{serial:.2f}"),
+        (f"`generate_dataset`, {args.workers} spawn workers, HDF5 included: clips / s",
+         f"{stats['clips_per_s']:.2f}"),
+        (f"same, vs {min(args.workers, os.cpu_count() or 1)} x the 1-process ceiling",
+         f"{stats['clips_per_s'] / (ceiling * min(args.workers, os.cpu_count() or 1)):.0%}"),
+        ("rejection rate in the writer run", f"{stats['rejection_rate']:.0%}"),
+    ]
+    command = "python " + " ".join([Path(sys.argv[0]).as_posix(), *sys.argv[1:]])
+    report = "\n".join(
+        [
+            "# Pushing generation speed",
+            "",
+            f"- command: `{command}`",
+            f"- machine: {cpu_model()}, {os.cpu_count()} cores, {platform.platform()}; "
+            f"MUJOCO_GL={os.environ.get('MUJOCO_GL')}",
+            f"- date: {datetime.datetime.now().isoformat(timespec='minutes')}",
+            f"- load average before / after (the machine is shared): {load_before[0]:.2f} / "
+            f"{load_after[0]:.2f}",
+            "",
+            "| measurement | value |",
+            "|---|---|",
+            *[f"| {name} | {value} |" for name, value in rows],
+            "",
+            f"50,000 training clips at the {args.workers}-worker rate take about "
+            f"{50_000 / stats['clips_per_s'] / 3600:.1f} h.",
+            "",
+        ]
+    )
+    print(report)
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(report)
+
+
+if __name__ == "__main__":
+    main()
