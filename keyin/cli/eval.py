@@ -31,7 +31,7 @@ def evaluate(cfg: DictConfig) -> dict:
         module, trained = load_keyframe_module(cfg.ckpt)
         discoverer, method = module.discover, trained["model"]["name"]
         dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
-    elif cfg.model is None:
+    elif OmegaConf.select(cfg, "model") is None:
         raise ConfigError("choose what to evaluate: model=random|constant or ckpt=<checkpoint path>")
     elif cfg.model.trainable:
         raise ConfigError(

@@ -3,19 +3,11 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
-
-def run(module, *overrides, cwd):
-    result = subprocess.run(
-        [sys.executable, "-m", f"keyin.cli.{module}", *overrides],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    return result
+from tests.cli.runner import last_json, run
 
 
 @pytest.fixture(scope="module")
@@ -25,10 +17,6 @@ def brownian_test_set(tmp_path_factory):
                  "progress=false", cwd=root)
     assert result.returncode == 0, result.stderr
     return root
-
-
-def last_json(stdout):
-    return json.loads(stdout.strip().splitlines()[-1])
 
 
 def test_generate_writes_shards_a_manifest_and_a_run_dir(brownian_test_set):
@@ -64,6 +52,12 @@ def test_commands_not_built_yet_say_so_and_exit_2(module, tmp_path):
     result = run(module, cwd=tmp_path)
     assert result.returncode == 2
     assert "not available yet" in result.stderr
+
+
+def test_console_scripts_are_installed_next_to_the_interpreter(tmp_path):
+    script = Path(sys.executable).parent / "keyin-plan"
+    result = subprocess.run([str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2 and "keyin-plan is not available yet" in result.stderr
 
 
 BAD_INPUTS = [

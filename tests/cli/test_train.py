@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from keyin.lit.checkpoints import CONFIG_KEY, load_checkpoint
-from tests.cli.test_cli import last_json, run
+from tests.cli.runner import last_json, run
 
 
 @pytest.fixture(scope="module")
