@@ -25,8 +25,10 @@ def train(cfg: DictConfig) -> dict | None:
     folder, scale, dataset = run_dir(), cfg.scale, cfg.dataset
     generator = instantiate(dataset.generator)
     clips = lambda split, size: split_clips(dataset, generator, split, size, cfg.data_dir)  # noqa: E731
+    datamodule = lambda batch_size: ClipDataModule(  # noqa: E731
+        clips("train", None), clips("val", scale.val_clips), batch_size, cfg.num_workers
+    )
     common = dict(
-        datamodule=ClipDataModule(clips("train", None), clips("val", scale.val_clips), scale.batch_size, cfg.num_workers),
         run_dir=folder,
         val_every=scale.val_every,
         checkpoint_every=scale.checkpoint_every,
@@ -35,7 +37,12 @@ def train(cfg: DictConfig) -> dict | None:
         config=OmegaConf.to_container(cfg, resolve=True),
     )
     if cfg.stage in ("both", "interpolator"):
-        fit_stage(instantiate(cfg.model.interpolator), max_steps=scale.stage1_steps, **common)
+        fit_stage(
+            instantiate(cfg.model.interpolator),
+            datamodule=datamodule(scale.stage1_batch_size),
+            max_steps=scale.stage1_steps,
+            **common,
+        )
     if cfg.stage == "interpolator":
         return None
     stage1 = load_checkpoint(
@@ -43,7 +50,7 @@ def train(cfg: DictConfig) -> dict | None:
     )
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
-    fit_stage(module, max_steps=scale.stage2_steps, **common)
+    fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
     if not cfg.evaluate:
         return None
     scores = evaluate_discoverer(module.discover, clips("test", scale.eval_clips), dataset.n_future)

@@ -46,6 +46,7 @@ class InterpolatorModule(L.LightningModule):
         kl_weight: float,
         ae_weight: float,
         lr: float,
+        ae_frames: int = 0,
         diagnostic_clips: int = 24,
     ) -> None:
         super().__init__()
@@ -131,9 +132,7 @@ class InterpolatorModule(L.LightningModule):
         bce, _, kl = self._segment_bce(clips, embeddings, clip, start, offset, "posterior")
         reconstruction = bce.sum() / n_clips
         kl_term = kl.sum() / n_clips
-        autoencoding = F.binary_cross_entropy_with_logits(
-            self.decoder(embeddings), clips, reduction="sum"
-        ) / n_clips
+        autoencoding = self._autoencoding_bce(clips.flatten(0, 1), embeddings.flatten(0, 1)) / n_clips
         loss = reconstruction + self.hparams.kl_weight * kl_term + self.hparams.ae_weight * autoencoding
         self.log_dict(
             {
@@ -145,6 +144,19 @@ class InterpolatorModule(L.LightningModule):
             prog_bar=True,
         )
         return loss
+
+    def _autoencoding_bce(self, frames: torch.Tensor, embeddings: torch.Tensor) -> torch.Tensor:
+        """Summed BCE of decoding the frames' own embeddings, (F, C, H, W) and (F, E).
+
+        With ``ae_frames`` > 0 a uniform random subset of that many frames is decoded and the sum is
+        rescaled to all frames (an unbiased estimate at a fraction of the decoder's cost).
+        """
+        n_frames = frames.shape[0]
+        if 0 < self.hparams.ae_frames < n_frames:
+            pick = torch.randperm(n_frames, generator=self.segment_rng)[: self.hparams.ae_frames].to(frames.device)
+            frames, embeddings = frames[pick], embeddings[pick]
+        bce = F.binary_cross_entropy_with_logits(self.decoder(embeddings), frames, reduction="sum")
+        return bce * n_frames / frames.shape[0]
 
     @torch.no_grad()
     def offset_contrast(self, batch: dict[str, torch.Tensor], latent: str = "prior") -> dict[str, Any]:
