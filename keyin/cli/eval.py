@@ -13,7 +13,7 @@ from keyin.cli.checks import check_common, require_positive_int
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
-from keyin.eval.discovery import evaluate_discoverer
+from keyin.eval.discovery import evaluate_discoverer, save_examples
 from keyin.lit.checkpoints import load_keyframe_module
 
 
@@ -54,6 +54,7 @@ def evaluate(cfg: DictConfig) -> dict:
         num_workers=cfg.num_workers,
         progress=cfg.progress,
     )
+    save_examples(discoverer, clips, dataset.n_cond, run_dir())
     metrics = dict(scores, method=method, dataset=dataset.name)
     write_metrics(metrics, run_dir())
     return metrics

@@ -12,7 +12,7 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli.app import CONFIG_DIR, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.data.datamodule import ClipDataModule, split_clips
-from keyin.eval.discovery import evaluate_discoverer
+from keyin.eval.discovery import evaluate_discoverer, save_examples
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.run import fit_stage
 
@@ -53,7 +53,9 @@ def train(cfg: DictConfig) -> dict | None:
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
     if not cfg.evaluate:
         return None
-    scores = evaluate_discoverer(module.discover, clips("test", scale.eval_clips), dataset.n_future)
+    test_clips = clips("test", scale.eval_clips)
+    scores = evaluate_discoverer(module.discover, test_clips, dataset.n_future)
+    save_examples(module.discover, test_clips, dataset.n_cond, folder)
     metrics = dict(scores, method=cfg.model.name, dataset=dataset.name)
     write_metrics(metrics, folder)
     return metrics

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Callable
 
 import torch
@@ -9,6 +10,7 @@ from rich.progress import Progress
 from torch.utils.data import DataLoader, Dataset
 
 from keyin.eval.f1 import keyframe_scores
+from keyin.viz.keyframes import save_keyframe_pictures
 
 Discoverer = Callable[[torch.Tensor, torch.Tensor], list[list[int]]]
 
@@ -32,3 +34,13 @@ def evaluate_discoverer(
             truth.extend(torch.nonzero(row).flatten().tolist() for row in batch["keyframes"])
             bar.update(task, advance=len(batch["frames"]))
     return keyframe_scores(predicted, truth, n_future)
+
+
+@torch.no_grad()
+def save_examples(discoverer: Discoverer, clips: Dataset, n_cond: int, folder: Path, count: int = 8) -> Path:
+    """Pictures of the first ``count`` clips with true and discovered keyframes (``keyframes.png/.gif``)."""
+    batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
+    predicted = discoverer(batch["frames"], batch["future_length"])
+    truth = [torch.nonzero(row).flatten().tolist() for row in batch["keyframes"]]
+    png, _ = save_keyframe_pictures(folder, batch["frames"], n_cond, truth, predicted)
+    return png

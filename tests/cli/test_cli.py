@@ -38,6 +38,7 @@ def test_eval_baseline_prints_metrics_and_writes_them(brownian_test_set, model):
     assert metrics["dataset"] == "brownian"
     saved = list((brownian_test_set / "runs" / f"eval_{model}_brownian").glob("*/*/metrics.json"))
     assert json.loads(saved[-1].read_text()) == metrics
+    assert (saved[-1].parent / "keyframes.png").is_file() and (saved[-1].parent / "keyframes.gif").is_file()
 
 
 def test_eval_reads_any_file_given_by_path(brownian_test_set):

@@ -25,6 +25,7 @@ def test_training_writes_both_stages_and_scores_the_test_clips(trained):
     assert metrics["method"] == "keyin" and metrics["n_sequences"] == 8
     assert 0.0 <= metrics["f1"] <= 1.0
     assert json.loads((root / "run" / "metrics.json").read_text()) == metrics
+    assert (root / "run" / "keyframes.png").is_file()
     for stage in ("interpolator", "keyframes"):
         checkpoint = load_checkpoint(root / "run" / "checkpoints" / stage / "last.ckpt", stage)
         assert checkpoint["global_step"] == 3

@@ -1,0 +1,23 @@
+import imageio.v3 as iio
+import numpy as np
+import torch
+
+from keyin.viz.keyframes import CONDITION, HIT, PREDICTED, TRUE, marked_frames, save_keyframe_pictures
+
+
+def test_borders_mark_truth_predictions_hits_and_conditioning():
+    frames = torch.zeros(6, 1, 4, 4)
+    marked = marked_frames(frames, n_cond=2, truth=[0, 2], predicted=[2, 3], border=1)
+    assert marked.shape == (6, 6, 6, 3)
+    corners = [tuple(image[0, 0]) for image in marked]
+    assert corners == [CONDITION, CONDITION, TRUE, (0, 0, 0), HIT, PREDICTED]
+    assert (marked[:, 1:-1, 1:-1] == 0).all()  # the image itself is untouched
+
+
+def test_png_has_one_row_per_clip_and_gif_one_frame_per_step(tmp_path):
+    clips = torch.rand(3, 5, 1, 8, 8)
+    png, gif = save_keyframe_pictures(tmp_path, clips, 2, [[0]] * 3, [[1]] * 3)
+    assert iio.imread(png).shape == (3 * 12, 5 * 12, 3)
+    movie = iio.imread(gif, index=None)
+    assert movie.shape[0] == 5 and movie.shape[2] == 3 * movie.shape[1]
+    assert np.array_equal(iio.imread(png)[:12, :12, :], marked_frames(clips[0], 2, [0], [1])[0])
