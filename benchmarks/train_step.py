@@ -1,0 +1,94 @@
+"""Stage-1 and stage-2 training-step time of KEYIN at a scale preset, with a profile.
+
+    python benchmarks/train_step.py --scale cpu --steps 5
+    python benchmarks/train_step.py --scale paper --steps 3
+
+Builds both LightningModules from the Hydra config exactly as keyin-train does, feeds random
+binary clips of the dataset's shape, and times ``training_step`` + backward + Adam (after one
+warm-up step); then profiles one step of each stage and prints the top operators by self CPU time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+from datetime import date
+
+import torch
+from hydra import compose, initialize_config_dir
+from hydra.utils import instantiate
+from torch.profiler import profile
+
+from keyin.cli.app import CONFIG_DIR
+
+
+def random_batch(dataset, batch_size: int) -> dict[str, torch.Tensor]:
+    length = dataset.n_cond + dataset.n_future
+    shape = (batch_size, length, dataset.channels, dataset.image_size, dataset.image_size)
+    return {
+        "frames": (torch.rand(shape) > 0.95).float(),
+        "future_length": torch.full((batch_size,), dataset.n_future),
+        "keyframes": torch.zeros(batch_size, dataset.n_future, dtype=torch.bool),
+    }
+
+
+def one_step(module, optimizer, batch) -> None:
+    loss = module.training_step(batch, 0)
+    optimizer.zero_grad()
+    loss.backward()
+    optimizer.step()
+
+
+def time_stage(module, batch, steps: int) -> tuple[list[float], str]:
+    module.log_dict = lambda *args, **kwargs: None  # no trainer attached
+    module.train()
+    if hasattr(module, "freeze_stage1"):
+        module.freeze_stage1()
+    optimizer = module.configure_optimizers()
+    one_step(module, optimizer, batch)  # warm-up
+    times = []
+    for _ in range(steps):
+        start = time.perf_counter()
+        one_step(module, optimizer, batch)
+        times.append(time.perf_counter() - start)
+    with profile() as profiler:
+        one_step(module, optimizer, batch)
+    table = profiler.key_averages().table(sort_by="self_cpu_time_total", row_limit=8)
+    return times, table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scale", default="cpu")
+    parser.add_argument("--dataset", default="brownian")
+    parser.add_argument("--steps", type=int, default=5)
+    args = parser.parse_args()
+    torch.manual_seed(0)
+    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+        cfg = compose("train", overrides=[f"scale={args.scale}", f"dataset={args.dataset}"])
+    stage1 = instantiate(cfg.model.interpolator)
+    stage2 = instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams))
+    stage2.load_stage1(stage1.state_dict())
+    print(f"## Training-step time, scale={args.scale}, dataset={args.dataset}\n")
+    print(f"- command: `python benchmarks/train_step.py --scale {args.scale} --dataset {args.dataset} "
+          f"--steps {args.steps}`")
+    print(f"- machine: {platform.processor() or platform.machine()}, {torch.get_num_threads()} threads, "
+          f"torch {torch.__version__}, {date.today()}; random binary clips, Adam, after 1 warm-up step\n")
+    print("| stage | clips/step | median s/step | min s/step |")
+    print("|---|---|---|---|")
+    profiles = []
+    for name, module, batch_size in (
+        ("1 (interpolator)", stage1, cfg.scale.stage1_batch_size),
+        ("2 (keyframes)", stage2, cfg.scale.batch_size),
+    ):
+        times, table = time_stage(module, random_batch(cfg.dataset, batch_size), args.steps)
+        print(f"| {name} | {batch_size} | {statistics.median(times):.3f} | {min(times):.3f} |")
+        profiles.append((name, table))
+    for name, table in profiles:
+        print(f"\nProfile of one stage-{name} step (self CPU time):\n\n```\n{table}```")
+
+
+if __name__ == "__main__":
+    main()
