@@ -3,6 +3,10 @@
 A subprocess per call would re-import torch and lightning (about 30 s each on the 2-core CI
 machine); in-process the imports are paid once per test session. ``main()`` still goes through
 Hydra's command-line parsing, config composition, the run dir and ``sys.exit``.
+
+Hydra's logging set-up is left out (``hydra/job_logging=none``): it closes every existing logging
+handler, and absl's handler (installed when dm_control is imported by another test module) then
+closes the stream it was created with — pytest's capture — once ``sys.stderr`` is redirected here.
 """
 
 from __future__ import annotations
@@ -17,6 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 
+NO_HYDRA_LOGGING = ("hydra/job_logging=none", "hydra/hydra_logging=none")
+
+
 @dataclass
 class Result:
     returncode: int
@@ -29,7 +36,7 @@ def run(module: str, *overrides: str, cwd: Path) -> Result:
     main = importlib.import_module(f"keyin.cli.{module}").main
     stdout, stderr = io.StringIO(), io.StringIO()
     previous_dir, previous_argv = os.getcwd(), sys.argv
-    sys.argv = [f"keyin-{module}", *overrides]
+    sys.argv = [f"keyin-{module}", *overrides, *NO_HYDRA_LOGGING]
     returncode = 0
     try:
         os.chdir(cwd)
