@@ -14,8 +14,8 @@ def trained(tmp_path_factory):
     root = tmp_path_factory.mktemp("train")
     generated = run("generate", "splits={test: 8}", "progress=false", cwd=root)
     assert generated.returncode == 0, generated.stderr
-    result = run("train", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
-                 "hydra.run.dir=run", cwd=root)
+    result = run("train", "experiment=brownian_keyin", "scale=smoke", "logger=none",
+                 "trainer.enable_progress_bar=false", "hydra.run.dir=run", cwd=root)
     assert result.returncode == 0, result.stderr
     return root, last_json(result.stdout)
 
