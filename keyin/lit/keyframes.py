@@ -13,6 +13,7 @@ from typing import Any
 import lightning as L
 import torch
 
+from keyin.eval.f1 import keyframe_scores
 from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
@@ -151,6 +152,20 @@ class KeyframeModule(L.LightningModule):
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._shared_step(batch, "val")
+        predicted = self.discover(batch["frames"], batch["future_length"])
+        truth = [torch.nonzero(row).flatten().tolist() for row in batch["keyframes"]]
+        scores = keyframe_scores(predicted, truth, batch["keyframes"].shape[1])
+        # One pattern for every clip is the constant-offset collapse (PROTOTYPE-FINDINGS §3).
+        patterns = len({tuple(row) for row in predicted})
+        self.log_dict(
+            {
+                "val/f1": scores["f1"],
+                "val/f1_tol1": scores["f1_tol1"],
+                "val/n_predicted": scores["n_predicted"],
+                "val/distinct_patterns": float(patterns),
+            },
+            prog_bar=True,
+        )
 
     @torch.no_grad()
     def discover(self, clips: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:

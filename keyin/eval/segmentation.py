@@ -1,0 +1,160 @@
+"""Exact best segmentation of a clip under a frozen interpolator: the stage-2 gate and a teacher.
+
+KEYIN's stage 2 can only find keyframes that make the frozen interpolator's job easier. Given the
+true frames, the best it could possibly do is the hard segmentation that minimises the summed
+interpolation BCE: choose keyframes at extended indices ``0 = k_0 < k_1 < … < k_m = N`` (``k = 0``
+is K^0, the last conditioning frame; ``k = j + 1`` is future position ``j``), each gap ``≤ S`` and
+``m ≤ M``, interpolate every gap between the *true* boundary embeddings and score the decoded
+frames. That is a shortest path over (index, count) and is solved exactly by dynamic programming.
+
+Its F1 against the ground truth measures whether an interpolator is good enough for stage 2 to
+discover the ground truth, before stage 2 is trained (PROTOTYPE-FINDINGS §4).
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+
+def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tensor]:
+    """Every segment that lies inside the clip, on the extended index.
+
+    Returns:
+        start (R,), offset (R,) int64 with ``0 <= start``, ``1 <= offset <= S``,
+        ``start + offset <= N``; ordered by start, then offset.
+    """
+    start = torch.arange(n_future).repeat_interleave(max_offset)
+    offset = torch.arange(1, max_offset + 1).repeat(n_future)
+    inside = start + offset <= n_future
+    return start[inside], offset[inside]
+
+
+def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[list[int]]]:
+    """Minimum-cost segmentation of ``0 … N`` into at most M gaps of at most S (exact DP).
+
+    Args:
+        costs: (B, N, S) cost of the segment from extended index ``a`` with offset ``o = s + 1``;
+            ``inf`` where ``a + o > N``.
+        n_keyframes: M, the most segments (keyframes) allowed.
+    Returns:
+        total (B,) the minimum summed cost, and per clip the keyframe *positions* (future frame
+        indices ``k - 1``) of the interior boundaries, the final boundary at ``N - 1`` excluded.
+    Raises:
+        ValueError: if M·S < N (no segmentation exists).
+    """
+    batch, n_future, max_offset = costs.shape
+    if n_keyframes * max_offset < n_future:
+        raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
+    inf = torch.tensor(float("inf"), dtype=costs.dtype)
+    # best[m, b, k]: cheapest cover of 0…k by exactly m gaps; back[m, b, k]: the gap's offset.
+    best = torch.full((n_keyframes + 1, batch, n_future + 1), float("inf"), dtype=costs.dtype)
+    back = torch.zeros((n_keyframes + 1, batch, n_future + 1), dtype=torch.long)
+    best[0, :, 0] = 0.0
+    for m in range(1, n_keyframes + 1):
+        for k in range(1, n_future + 1):
+            offsets = torch.arange(1, min(max_offset, k) + 1)  # gap ending at k
+            candidates = best[m - 1][:, k - offsets] + costs[:, k - offsets, offsets - 1]  # (B, o)
+            value, arg = candidates.min(dim=1)
+            best[m, :, k] = torch.where(torch.isfinite(value), value, inf)
+            back[m, :, k] = offsets[arg]
+    total, n_gaps = best[:, :, n_future].min(dim=0)  # over m
+    positions: list[list[int]] = []
+    for b in range(batch):
+        k, m, boundaries = n_future, int(n_gaps[b]), []
+        while m > 0:
+            boundaries.append(k)
+            k -= int(back[m, b, k])
+            m -= 1
+        positions.append(sorted(index - 1 for index in boundaries if index < n_future))
+    return total, positions
+
+
+@torch.no_grad()
+def interpolation_costs(
+    interpolator: torch.nn.Module,
+    decoder: torch.nn.Module,
+    boundary_emb: Tensor,
+    frames: Tensor,
+    chunk: int = 4096,
+) -> Tensor:
+    """Summed BCE of interpolating every in-clip segment between true boundary embeddings.
+
+    Args:
+        interpolator: a deterministic-or-mean :class:`keyin.models.Interpolator` (z = 0).
+        decoder: the decoder it was trained with (returns logits).
+        boundary_emb: (B, N + 1, E) embeddings on the extended index (K^0, then the N future frames).
+        frames: (B, N, D) the future frames in [0, 1], flattened.
+        chunk: segments per interpolator/decoder call.
+    Returns:
+        (B, N, S) costs, ``inf`` where the segment leaves the clip.
+    """
+    batch, n_ext, _ = boundary_emb.shape
+    n_future, max_offset = n_ext - 1, interpolator.max_offset
+    start, offset = segment_starts_offsets(n_future, max_offset)
+    costs = torch.full((batch, n_future, max_offset), float("inf"))
+    clip = torch.arange(batch).repeat_interleave(len(start))
+    start, offset = start.repeat(batch), offset.repeat(batch)
+    for first in range(0, len(clip), chunk):
+        part = slice(first, first + chunk)
+        c, a, o = clip[part], start[part], offset[part]
+        z = boundary_emb.new_zeros(len(c), interpolator.latent_dim)
+        predicted = interpolator(
+            boundary_emb[c, a], boundary_emb[c, a + o], F.one_hot(o - 1, max_offset).to(boundary_emb), z
+        )  # (R, S, E)
+        steps = torch.arange(max_offset)
+        valid = steps[None, :] < o[:, None]  # (R, S)
+        target_index = (a[:, None] + steps[None, :]).clamp(max=n_future - 1)  # positions a … a+o-1
+        logits = decoder(predicted[valid]).flatten(1)  # (V, D)
+        targets = frames[c[:, None].expand_as(target_index)[valid], target_index[valid]]
+        bce = F.binary_cross_entropy_with_logits(logits, targets, reduction="none").sum(1)
+        per_segment = torch.zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
+        costs[c, a, o - 1] = per_segment
+    return costs
+
+
+def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
+    """Summed cost of given keyframe positions, closed by a final boundary at ``N - 1``.
+
+    Args:
+        costs: (B, N, S) from :func:`interpolation_costs`.
+        positions: per clip, increasing future positions in ``0 … N-2``.
+    Returns:
+        (B,) total cost; ``inf`` where a gap exceeds S.
+    """
+    batch, n_future, max_offset = costs.shape
+    totals = torch.zeros(batch, dtype=costs.dtype)
+    for b, row in enumerate(positions):
+        boundaries = [0] + [p + 1 for p in row if p < n_future - 1] + [n_future]
+        for left, right in zip(boundaries[:-1], boundaries[1:]):
+            gap = right - left
+            totals[b] += costs[b, left, gap - 1] if 1 <= gap <= max_offset else float("inf")
+    return totals
+
+
+class SegmentationDiscoverer:
+    """Keyframes = the exact best segmentation under a trained stage-1 model (see module doc).
+
+    Args:
+        stage1: an :class:`keyin.lit.interpolator.InterpolatorModule` (frozen, eval mode).
+        n_keyframes: M.
+    """
+
+    def __init__(self, stage1: torch.nn.Module, n_keyframes: int) -> None:
+        self.stage1, self.n_keyframes = stage1.eval(), n_keyframes
+        self.last_costs: Tensor | None = None
+
+    @torch.no_grad()
+    def __call__(self, clips: Tensor, future_length: Tensor) -> list[list[int]]:
+        """Keyframe positions of (B, L, C, H, W) full-length clips."""
+        n_cond = self.stage1.hparams.n_cond
+        if bool((future_length < clips.shape[1] - n_cond).any()):
+            raise ValueError("SegmentationDiscoverer needs full-length clips")
+        embeddings = self.stage1.encoder(clips)  # (B, L, E)
+        costs = interpolation_costs(
+            self.stage1.interpolator, self.stage1.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2)
+        )
+        self.last_costs = costs
+        _, positions = best_segmentation(costs, self.n_keyframes)
+        return positions

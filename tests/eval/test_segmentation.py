@@ -1,0 +1,71 @@
+import itertools
+
+import pytest
+import torch
+
+from keyin.eval.segmentation import best_segmentation, interpolation_costs, path_cost, segment_starts_offsets
+from keyin.models import ConvDecoder, Interpolator
+
+
+def brute_force(costs: torch.Tensor, n_keyframes: int) -> tuple[float, list[int]]:
+    """Enumerate every composition of N into at most M parts of at most S."""
+    n_future, max_offset = costs.shape
+    best = (float("inf"), [])
+    for m in range(1, n_keyframes + 1):
+        for gaps in itertools.product(range(1, max_offset + 1), repeat=m):
+            if sum(gaps) != n_future:
+                continue
+            boundaries = [0, *itertools.accumulate(gaps)]
+            total = sum(float(costs[a, g - 1]) for a, g in zip(boundaries[:-1], gaps))
+            if total < best[0]:
+                best = (total, [k - 1 for k in boundaries[1:-1]])
+    return best
+
+
+def test_dp_matches_enumeration():
+    torch.manual_seed(0)
+    n_future, max_offset, n_keyframes = 9, 4, 4
+    costs = torch.rand(5, n_future, max_offset) * 10
+    start, offset = segment_starts_offsets(n_future, max_offset)
+    outside = torch.ones(n_future, max_offset, dtype=torch.bool)
+    outside[start, offset - 1] = False
+    costs[:, outside] = float("inf")
+    total, positions = best_segmentation(costs, n_keyframes)
+    for b in range(5):
+        expected_total, expected_positions = brute_force(costs[b], n_keyframes)
+        assert total[b].item() == pytest.approx(expected_total)
+        assert positions[b] == expected_positions
+    assert torch.allclose(path_cost(costs, positions), total)
+
+
+def test_dp_recovers_planted_boundaries():
+    n_future, max_offset = 12, 6
+    costs = torch.full((1, n_future, max_offset), 5.0)
+    for left, right in [(0, 4), (4, 9), (9, 12)]:  # cheap gaps ending at positions 3 and 8
+        costs[0, left, right - left - 1] = 0.0
+    total, positions = best_segmentation(costs, n_keyframes=4)
+    assert positions == [[3, 8]] and total.item() == 0.0
+
+
+def test_dp_rejects_uncoverable_clip():
+    with pytest.raises(ValueError, match="cannot cover"):
+        best_segmentation(torch.zeros(1, 10, 3), n_keyframes=3)
+
+
+def test_interpolation_costs_match_direct_decoding():
+    torch.manual_seed(0)
+    n_future, max_offset, embed_dim = 6, 3, 8
+    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
+    boundary_emb = torch.rand(2, n_future + 1, embed_dim)
+    frames = (torch.rand(2, n_future, 64) > 0.5).float()
+    costs = interpolation_costs(interpolator, decoder, boundary_emb, frames, chunk=5)
+    b, a, o = 1, 2, 3
+    with torch.no_grad():
+        out = interpolator(boundary_emb[b, a][None], boundary_emb[b, a + o][None],
+                           torch.nn.functional.one_hot(torch.tensor([o - 1]), max_offset).float())
+        logits = decoder(out[0, :o]).flatten(1)
+    expected = torch.nn.functional.binary_cross_entropy_with_logits(
+        logits, frames[b, a : a + o], reduction="sum")
+    assert costs[b, a, o - 1].item() == pytest.approx(expected.item(), rel=1e-5)
+    assert torch.isinf(costs[:, 5, 1]).all() and torch.isfinite(costs[:, 5, 0]).all()
