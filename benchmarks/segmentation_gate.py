@@ -33,6 +33,7 @@ def main() -> None:
     parser.add_argument("--clips", type=int, default=200)
     parser.add_argument("--keyframes", type=int, default=6)
     parser.add_argument("--constant", type=int, default=6)
+    parser.add_argument("--space", default="pixels", choices=("pixels", "embeddings"))
     parser.add_argument("--data-dir", default="data/brownian")
     args = parser.parse_args()
     checkpoint = load_checkpoint(args.ckpt, "interpolator")
@@ -42,7 +43,7 @@ def main() -> None:
     clips = ShardClips(split_files(Path(args.data_dir), "test"), (hp.image_size, hp.image_size, hp.channels),
                        hp.n_cond, hp.n_future)
     clips = Subset(clips, range(min(args.clips, len(clips))))
-    discoverer = SegmentationDiscoverer(stage1, args.keyframes)
+    discoverer = SegmentationDiscoverer(stage1, args.keyframes, args.space)
     started = time.perf_counter()
     scores = evaluate_discoverer(discoverer, clips, hp.n_future, batch_size=len(clips))
     seconds = time.perf_counter() - started
@@ -54,10 +55,10 @@ def main() -> None:
     dp = path_cost(costs, dp_positions)
     n_dp = sum(map(len, dp_positions)) / len(dp_positions)
     print(f"## Segmentation gate: {args.ckpt}\n")
-    print(f"- command: `python benchmarks/segmentation_gate.py {args.ckpt} --clips {args.clips}`")
+    print(f"- command: `python benchmarks/segmentation_gate.py {args.ckpt} --clips {args.clips} --space {args.space}`")
     print(f"- machine: {platform.machine()}, {torch.get_num_threads()} threads, torch {torch.__version__}, "
           f"{date.today()}; step {checkpoint.get('global_step')}; {seconds:.1f} s\n")
-    print("| segmentation | mean summed BCE (nats/clip) |")
+    print(f"| segmentation | mean summed cost ({args.space}) |")
     print("|---|---|")
     for name, positions_cost in [("DP optimum", dp), ("ground truth", path_cost(costs, truth)),
                                  (f"constant {args.constant}", path_cost(costs, constant))]:

@@ -17,6 +17,9 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+SPACES = ("pixels", "embeddings")
+IGNORE_OFFSET = -100
+
 
 def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tensor]:
     """Every segment that lies inside the clip, on the extended index.
@@ -71,6 +74,27 @@ def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[lis
     return total, positions
 
 
+def _all_segments(batch: int, n_future: int, max_offset: int) -> tuple[Tensor, Tensor, Tensor]:
+    """clip, start, offset (R,) of every in-clip segment of every clip."""
+    start, offset = segment_starts_offsets(n_future, max_offset)
+    clip = torch.arange(batch).repeat_interleave(len(start))
+    return clip, start.repeat(batch), offset.repeat(batch)
+
+
+def _interpolate(interpolator: torch.nn.Module, boundary_emb: Tensor, clip: Tensor, start: Tensor, offset: Tensor) -> Tensor:
+    """(R, S, E) interpolation between the true boundary embeddings, z = 0."""
+    z = boundary_emb.new_zeros(len(clip), interpolator.latent_dim)
+    onehot = F.one_hot(offset - 1, interpolator.max_offset).to(boundary_emb)
+    return interpolator(boundary_emb[clip, start], boundary_emb[clip, start + offset], onehot, z)
+
+
+def _output_positions(start: Tensor, offset: Tensor, max_offset: int, n_future: int) -> tuple[Tensor, Tensor]:
+    """Future positions ``a … a+o-1`` of each segment's outputs (R, S) and which exist (R, S)."""
+    steps = torch.arange(max_offset, device=start.device)
+    valid = steps[None, :] < offset[:, None]
+    return (start[:, None] + steps[None, :]).clamp(max=n_future - 1), valid
+
+
 @torch.no_grad()
 def interpolation_costs(
     interpolator: torch.nn.Module,
@@ -79,10 +103,10 @@ def interpolation_costs(
     frames: Tensor,
     chunk: int = 4096,
 ) -> Tensor:
-    """Summed BCE of interpolating every in-clip segment between true boundary embeddings.
+    """Summed pixel BCE of interpolating every in-clip segment between true boundary embeddings.
 
     Args:
-        interpolator: a deterministic-or-mean :class:`keyin.models.Interpolator` (z = 0).
+        interpolator: a :class:`keyin.models.Interpolator`, run with z = 0.
         decoder: the decoder it was trained with (returns logits).
         boundary_emb: (B, N + 1, E) embeddings on the extended index (K^0, then the N future frames).
         frames: (B, N, D) the future frames in [0, 1], flattened.
@@ -92,25 +116,39 @@ def interpolation_costs(
     """
     batch, n_ext, _ = boundary_emb.shape
     n_future, max_offset = n_ext - 1, interpolator.max_offset
-    start, offset = segment_starts_offsets(n_future, max_offset)
     costs = torch.full((batch, n_future, max_offset), float("inf"))
-    clip = torch.arange(batch).repeat_interleave(len(start))
-    start, offset = start.repeat(batch), offset.repeat(batch)
+    clip, start, offset = _all_segments(batch, n_future, max_offset)
     for first in range(0, len(clip), chunk):
-        part = slice(first, first + chunk)
-        c, a, o = clip[part], start[part], offset[part]
-        z = boundary_emb.new_zeros(len(c), interpolator.latent_dim)
-        predicted = interpolator(
-            boundary_emb[c, a], boundary_emb[c, a + o], F.one_hot(o - 1, max_offset).to(boundary_emb), z
-        )  # (R, S, E)
-        steps = torch.arange(max_offset)
-        valid = steps[None, :] < o[:, None]  # (R, S)
-        target_index = (a[:, None] + steps[None, :]).clamp(max=n_future - 1)  # positions a … a+o-1
+        c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
+        predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
+        positions, valid = _output_positions(a, o, max_offset, n_future)
         logits = decoder(predicted[valid]).flatten(1)  # (V, D)
-        targets = frames[c[:, None].expand_as(target_index)[valid], target_index[valid]]
+        targets = frames[c[:, None].expand_as(positions)[valid], positions[valid]]
         bce = F.binary_cross_entropy_with_logits(logits, targets, reduction="none").sum(1)
-        per_segment = torch.zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
-        costs[c, a, o - 1] = per_segment
+        costs[c, a, o - 1] = torch.zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
+    return costs
+
+
+@torch.no_grad()
+def embedding_costs(interpolator: torch.nn.Module, boundary_emb: Tensor) -> Tensor:
+    """Summed squared embedding error of every in-clip segment: the decoder-free, cheap variant.
+
+    Args:
+        interpolator: a :class:`keyin.models.Interpolator`, run with z = 0.
+        boundary_emb: (B, N + 1, E) embeddings on the extended index.
+    Returns:
+        (B, N, S) costs, ``inf`` where the segment leaves the clip.
+    """
+    batch, n_ext, _ = boundary_emb.shape
+    n_future, max_offset = n_ext - 1, interpolator.max_offset
+    clip, start, offset = _all_segments(batch, n_future, max_offset)
+    clip, start, offset = clip.to(boundary_emb.device), start.to(boundary_emb.device), offset.to(boundary_emb.device)
+    predicted = _interpolate(interpolator, boundary_emb, clip, start, offset)  # (R, S, E)
+    positions, valid = _output_positions(start, offset, max_offset, n_future)
+    targets = boundary_emb[clip[:, None], positions + 1]  # (R, S, E): future position p is index p + 1
+    per_segment = (((predicted - targets) ** 2).sum(-1) * valid).sum(-1)  # (R,)
+    costs = boundary_emb.new_full((batch, n_future, max_offset), float("inf"))
+    costs[clip, start, offset - 1] = per_segment
     return costs
 
 
@@ -139,10 +177,14 @@ class SegmentationDiscoverer:
     Args:
         stage1: an :class:`keyin.lit.interpolator.InterpolatorModule` (frozen, eval mode).
         n_keyframes: M.
+        space: "pixels" (decoded BCE, what L_inter scores) or "embeddings" (squared error of the
+            interpolated embeddings, no decoding).
     """
 
-    def __init__(self, stage1: torch.nn.Module, n_keyframes: int) -> None:
-        self.stage1, self.n_keyframes = stage1.eval(), n_keyframes
+    def __init__(self, stage1: torch.nn.Module, n_keyframes: int, space: str = "pixels") -> None:
+        if space not in SPACES:
+            raise ValueError(f"space must be one of {SPACES}, got {space!r}")
+        self.stage1, self.n_keyframes, self.space = stage1.eval(), n_keyframes, space
         self.last_costs: Tensor | None = None
 
     @torch.no_grad()
@@ -151,10 +193,33 @@ class SegmentationDiscoverer:
         n_cond = self.stage1.hparams.n_cond
         if bool((future_length < clips.shape[1] - n_cond).any()):
             raise ValueError("SegmentationDiscoverer needs full-length clips")
-        embeddings = self.stage1.encoder(clips)  # (B, L, E)
-        costs = interpolation_costs(
-            self.stage1.interpolator, self.stage1.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2)
-        )
+        boundary_emb = self.stage1.encoder(clips)[:, n_cond - 1 :]  # (B, N + 1, E)
+        if self.space == "embeddings":
+            costs = embedding_costs(self.stage1.interpolator, boundary_emb)
+        else:
+            costs = interpolation_costs(
+                self.stage1.interpolator, self.stage1.decoder, boundary_emb, clips[:, n_cond:].flatten(2)
+            )
         self.last_costs = costs
         _, positions = best_segmentation(costs, self.n_keyframes)
         return positions
+
+
+def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes: int) -> Tensor:
+    """Offsets of keyframes 1…M for given interior positions closed at ``N - 1``.
+
+    Args:
+        positions: per clip, increasing interior keyframe positions (as from
+            :func:`best_segmentation`).
+        n_future: N.
+        n_keyframes: M.
+    Returns:
+        (B, M) int64 offsets in 1…S; ``-100`` (``cross_entropy``'s ignore index) for keyframes
+        after the one closing the clip at ``N - 1``, which the segmentation leaves free.
+    """
+    offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
+    for b, row in enumerate(positions):
+        boundaries = [-1, *row, n_future - 1]
+        gaps = [right - left for left, right in zip(boundaries[:-1], boundaries[1:])]
+        offsets[b, : len(gaps)] = torch.tensor(gaps[:n_keyframes])
+    return offsets

@@ -14,7 +14,8 @@ import lightning as L
 import torch
 
 from keyin.eval.f1 import keyframe_scores
-from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss
+from keyin.eval.segmentation import IGNORE_OFFSET, best_segmentation, embedding_costs, segmentation_offsets
+from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
@@ -41,6 +42,8 @@ class KeyframeModule(L.LightningModule):
         beta_kl: float,
         normalize_key_targets: bool,
         lr: float,
+        teacher_weight: float = 0.0,
+        teacher_clips: int = 0,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -112,6 +115,8 @@ class KeyframeModule(L.LightningModule):
             "log_sigma": keys.log_sigma,
             "attention": keys.attention,
             "future_emb": future_emb,
+            "boundary_emb": embeddings[:, n_cond - 1 :],
+            "offset_logits": keys.offset_logits,
             "frames": frames.reshape(n_clips, n_keys, max_offset, -1),
         }
 
@@ -132,6 +137,11 @@ class KeyframeModule(L.LightningModule):
             beta_kl=self.hparams.beta_kl,
             normalize_key_targets=self.hparams.normalize_key_targets,
         )
+        if stage == "train" and self.hparams.teacher_weight > 0:
+            teacher = self._teacher_loss(out, future_length)
+            terms["teacher"] = teacher
+            terms["loss"] = terms["loss"] + self.hparams.teacher_weight * teacher
+            self.log("train/teacher", teacher)
         entropy = -(out["offset_probs"] * out["offset_probs"].clamp_min(1e-12).log()).sum(-1)
         self.log_dict(
             {
@@ -146,6 +156,25 @@ class KeyframeModule(L.LightningModule):
             prog_bar=stage == "train",
         )
         return terms
+
+    def _teacher_loss(self, out: dict[str, torch.Tensor], future_length: torch.Tensor) -> torch.Tensor:
+        """Cross-entropy of δ to the exact best segmentation under the frozen interpolator.
+
+        Optional (``teacher_weight`` > 0, off in the paper's setting): the DP of
+        :mod:`keyin.eval.segmentation` on the decoder-free embedding costs gives, for each clip,
+        the hard offsets that minimise the interpolation error between the true frames — the
+        optimum the soft loss relaxes. It keeps δ from collapsing to one offset for every clip
+        (docs/decisions.md). Computed on the first ``teacher_clips`` clips (0: all); clips shorter
+        than N get no target.
+        """
+        n_clips = self.hparams.teacher_clips or out["boundary_emb"].shape[0]
+        boundary_emb = out["boundary_emb"][:n_clips].detach()
+        costs = embedding_costs(self.interpolator, boundary_emb).cpu()
+        _, positions = best_segmentation(costs, self.hparams.n_keyframes)
+        n_future = boundary_emb.shape[1] - 1
+        targets = segmentation_offsets(positions, n_future, self.hparams.n_keyframes)
+        targets[future_length[:n_clips].cpu() < n_future] = IGNORE_OFFSET
+        return offset_teacher_loss(out["offset_logits"][:n_clips], targets.to(boundary_emb.device))
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         return self._shared_step(batch, "train")["loss"]

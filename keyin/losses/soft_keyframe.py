@@ -276,6 +276,21 @@ def keyin_loss(
     return result
 
 
+def offset_teacher_loss(offset_logits: Tensor, target_offsets: Tensor) -> Tensor:
+    """Cross-entropy of the offset distributions to teacher offsets (our addition, not the paper's).
+
+    Args:
+        offset_logits: (B, M, S) logits of δ.
+        target_offsets: (B, M) offsets in 1…S; negative entries are ignored.
+    Returns:
+        Scalar: mean over the keyframes with a target (0 if none).
+    """
+    targets = torch.where(target_offsets > 0, target_offsets - 1, torch.full_like(target_offsets, -100))
+    if not bool((targets >= 0).any()):
+        return offset_logits.sum() * 0.0
+    return F.cross_entropy(offset_logits.flatten(0, 1).float(), targets.flatten(), ignore_index=-100)
+
+
 def argmax_positions(offset_probs: Tensor) -> Tensor:
     """Most likely position of each keyframe, from argmax offsets (REFERENCE §1, §3.9).
 

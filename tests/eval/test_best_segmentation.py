@@ -3,7 +3,14 @@ import itertools
 import pytest
 import torch
 
-from keyin.eval.segmentation import best_segmentation, interpolation_costs, path_cost, segment_starts_offsets
+from keyin.eval.segmentation import (
+    best_segmentation,
+    interpolation_costs,
+    path_cost,
+    segment_starts_offsets,
+    segmentation_offsets,
+)
+from keyin.losses.soft_keyframe import offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
 
 
@@ -69,3 +76,20 @@ def test_interpolation_costs_match_direct_decoding():
         logits, frames[b, a : a + o], reduction="sum")
     assert costs[b, a, o - 1].item() == pytest.approx(expected.item(), rel=1e-5)
     assert torch.isinf(costs[:, 5, 1]).all() and torch.isfinite(costs[:, 5, 0]).all()
+
+
+def test_segmentation_offsets_close_the_clip_and_ignore_the_rest():
+    offsets = segmentation_offsets([[3, 8], [9, 19]], n_future=12, n_keyframes=4)
+    assert offsets[0].tolist() == [4, 5, 3, -100]
+    assert offsets[1, :2].tolist() == [10, 10]
+
+
+def test_offset_teacher_loss_is_cross_entropy_on_kept_keyframes():
+    logits = torch.randn(2, 3, 5, requires_grad=True)
+    targets = torch.tensor([[2, 5, -100], [1, -100, -100]])
+    loss = offset_teacher_loss(logits, targets)
+    kept = [(0, 0, 1), (0, 1, 4), (1, 0, 0)]
+    expected = sum(-torch.log_softmax(logits[b, t], -1)[a] for b, t, a in kept) / len(kept)
+    assert loss.item() == pytest.approx(expected.item(), rel=1e-6)
+    loss.backward()
+    assert logits.grad[0, 2].abs().sum() == 0 and logits.grad[1, 1:].abs().sum() == 0

@@ -1,0 +1,49 @@
+import torch
+
+from keyin.lit.interpolator import InterpolatorModule
+from keyin.lit.keyframes import KeyframeModule
+
+STAGE1 = dict(
+    image_size=8, channels=1, n_cond=2, n_future=6, max_offset=3, embed_dim=8, conv_width=4,
+    coord_channels=True, norm="group", latent_dim=0, lstm_hidden=16, lstm_layers=1, mlp_hidden=16,
+    step_input="boundaries", offset_min=1, offset_max=3, kl_weight=0.0, ae_weight=1.0, lr=1e-3,
+)
+
+
+def keyframe_module(teacher_weight: float) -> KeyframeModule:
+    torch.manual_seed(0)
+    stage1 = dict(InterpolatorModule(**STAGE1).hparams)
+    module = KeyframeModule(
+        stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
+        offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
+        normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,
+    )
+    module.log = module.log_dict = lambda *args, **kwargs: None  # no trainer attached
+    return module
+
+
+def batch() -> dict[str, torch.Tensor]:
+    torch.manual_seed(1)
+    return {
+        "frames": (torch.rand(3, 8, 1, 8, 8) > 0.8).float(),
+        "future_length": torch.tensor([6, 6, 4]),
+        "keyframes": torch.zeros(3, 6, dtype=torch.bool),
+    }
+
+
+def test_teacher_adds_an_offset_cross_entropy_that_trains_the_predictor_only():
+    plain = keyframe_module(0.0)._shared_step(batch(), "train")
+    module = keyframe_module(10.0)
+    terms = module._shared_step(batch(), "train")
+    assert "teacher" not in plain and terms["teacher"] > 0
+    assert torch.isclose(terms["loss"], plain["loss"] + 10.0 * terms["teacher"])
+    module.zero_grad()
+    terms["teacher"].backward()
+    assert module.predictor.offset_head.weight.grad.abs().sum() > 0
+    frozen = [*module.encoder.parameters(), *module.decoder.parameters(), *module.interpolator.parameters()]
+    assert all(p.grad is None for p in frozen)
+
+
+def test_teacher_is_not_used_in_validation():
+    terms = keyframe_module(10.0)._shared_step(batch(), "val")
+    assert "teacher" not in terms
