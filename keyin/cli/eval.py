@@ -14,7 +14,8 @@ from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
 from keyin.eval.discovery import evaluate_discoverer, save_examples
-from keyin.lit.checkpoints import load_keyframe_module
+from keyin.eval.segmentation import SegmentationDiscoverer
+from keyin.lit.checkpoints import load_trained_module
 
 
 def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:
@@ -28,8 +29,12 @@ def evaluate(cfg: DictConfig) -> dict:
     check_common(cfg)
     require_positive_int(cfg.batch_size, "batch_size")
     if cfg.ckpt is not None:
-        module, trained = load_keyframe_module(cfg.ckpt)
-        discoverer, method = module.discover, trained["model"]["name"]
+        module, trained = load_trained_module(cfg.ckpt, stage=None)
+        if module.stage == "interpolator":  # exact best segmentation under the interpolator
+            discoverer = SegmentationDiscoverer(module, trained["dataset"]["n_keyframes"])
+            method = f"{trained['model']['name']}_segmentation"
+        else:
+            discoverer, method = module.discover, trained["model"]["name"]
         dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
     elif OmegaConf.select(cfg, "model") is None:
         raise ConfigError("choose what to evaluate: model=random|constant or ckpt=<checkpoint path>")

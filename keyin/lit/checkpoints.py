@@ -57,11 +57,18 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     return checkpoint
 
 
-def load_keyframe_module(path: str | Path) -> tuple[L.LightningModule, dict[str, Any]]:
-    """A trained stage-2 module (in eval mode) and the run config stored with it."""
-    from keyin.lit.keyframes import KeyframeModule  # the module imports this file's callback
+def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tuple[L.LightningModule, dict[str, Any]]:
+    """A trained module of either stage (in eval mode) and the run config stored with it.
 
-    checkpoint = load_checkpoint(path, "keyframes")
-    module = KeyframeModule(**checkpoint["hyper_parameters"])
+    Args:
+        stage: "interpolator", "keyframes", or None for whichever the checkpoint holds.
+    """
+    # The modules import this file's callback, so they are imported here.
+    from keyin.lit.interpolator import InterpolatorModule
+    from keyin.lit.keyframes import KeyframeModule
+
+    checkpoint = load_checkpoint(path, stage)
+    module_class = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule}[checkpoint[STAGE_KEY]]
+    module = module_class(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
     return module.eval(), checkpoint[CONFIG_KEY]

@@ -67,8 +67,18 @@ def test_stage2_without_a_stage1_checkpoint_names_the_fix(tmp_path):
     assert "does not exist" in result.stderr and "Traceback" not in result.stderr
 
 
-def test_a_checkpoint_of_the_wrong_stage_is_refused(trained):
+def test_a_checkpoint_of_the_wrong_stage_is_refused(trained, tmp_path):
     root, _ = trained
-    result = run("eval", "ckpt=run/checkpoints/interpolator/last.ckpt", cwd=root)
+    result = run("train", "scale=smoke", "stage=keyframes", "logger=none",
+                 f"interpolator_ckpt={root}/run/checkpoints/keyframes/last.ckpt", cwd=tmp_path)
     assert result.returncode == 2
-    assert "is a 'interpolator' checkpoint but a 'keyframes' one is needed" in result.stderr
+    assert "is a 'keyframes' checkpoint but a 'interpolator' one is needed" in result.stderr
+
+
+def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
+    root, _ = trained
+    result = run("eval", "ckpt=run/checkpoints/interpolator/last.ckpt", "progress=false", cwd=root)
+    assert result.returncode == 0, result.stderr
+    metrics = last_json(result.stdout)
+    assert metrics["method"] == "keyin_segmentation" and metrics["n_sequences"] == 8
+    assert 0 < metrics["n_predicted"] <= 5  # at most M = 6 gaps, the last one closing the clip
