@@ -44,6 +44,7 @@ class KeyframeModule(L.LightningModule):
         lr: float,
         teacher_weight: float = 0.0,
         teacher_clips: int = 0,
+        offset_evidence: bool = False,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -59,6 +60,7 @@ class KeyframeModule(L.LightningModule):
             attn_scale=attn_scale,
             offset_mode=offset_mode,
             fixed_offset=fixed_offset,
+            offset_evidence=offset_evidence,
         )
         self.freeze_stage1()
 

@@ -17,6 +17,29 @@ PROB_EPS = 1e-6
 """Clamp of BCE probabilities, coverage and ``c^t`` normalisers (REFERENCE §3.5, §8.12)."""
 
 
+def initial_position(batch: int, n_ext: int, like: Tensor) -> Tensor:
+    """``D^0``: K^0 at extended index 0 with certainty, (B, L_ext)."""
+    position = like.new_zeros(batch, n_ext)
+    position[:, 0] = 1.0
+    return position
+
+
+def shifted_positions(previous_pos: Tensor, max_offset: int) -> Tensor:
+    """``X^t[b, a, k] = D^{t-1}[b, k - a - 1]``: where keyframe t sits if its offset is a + 1.
+
+    Args:
+        previous_pos: (B, L_ext) ``D^{t-1}``.
+        max_offset: S.
+    Returns:
+        (B, S, L_ext), zero where ``k - a - 1 < 0``.
+    """
+    n_ext = previous_pos.shape[-1]
+    # windows[b, k, s] = padded[b, k + s] = D^{t-1}[b, k + s - S]; flipping s gives X.
+    padded = F.pad(previous_pos, (max_offset, 0))
+    windows = padded.unfold(-1, max_offset, 1)[:, :n_ext]
+    return windows.flip(-1).transpose(-1, -2)
+
+
 def position_distributions(offset_probs: Tensor) -> tuple[Tensor, Tensor]:
     """Keyframe and per-frame position distributions by shift-and-weight (REFERENCE §3.2, §3.5).
 
@@ -34,15 +57,10 @@ def position_distributions(offset_probs: Tensor) -> tuple[Tensor, Tensor]:
     n_ext = n_keys * max_offset + 1
     # e^t[i] = Σ_{a >= i} δ^t[a]: reverse cumulative sum over offsets.
     exist_probs = offset_probs.flip(-1).cumsum(-1).flip(-1)
-    previous_pos = offset_probs.new_zeros(batch, n_ext)
-    previous_pos[:, 0] = 1.0  # D^0: K^0 at position -1
+    previous_pos = initial_position(batch, n_ext, offset_probs)
     keyframe_pos, shifted_stack = [], []
     for key in range(n_keys):
-        # windows[b, k, s] = padded[b, k + s] = D^{t-1}[b, k + s - S]; flipping s gives
-        # shifted[b, k, a] = D^{t-1}[b, k - a - 1] (zero where k - a - 1 < 0).
-        padded = F.pad(previous_pos, (max_offset, 0))
-        windows = padded.unfold(-1, max_offset, 1)[:, :n_ext]
-        shifted = windows.flip(-1).transpose(-1, -2)  # (B, S, L_ext)
+        shifted = shifted_positions(previous_pos, max_offset)  # (B, S, L_ext)
         previous_pos = torch.einsum("bak,ba->bk", shifted, offset_probs[:, key])
         keyframe_pos.append(previous_pos)
         shifted_stack.append(shifted)

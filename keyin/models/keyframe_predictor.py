@@ -10,6 +10,7 @@ import torch
 from torch import Tensor, nn
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
+from keyin.losses.soft_keyframe import initial_position, shifted_positions
 from keyin.models.attention import attention_posterior
 from keyin.models.recurrent import LSTMBlock, init_forget_bias
 
@@ -64,6 +65,13 @@ class KeyframePredictor(nn.Module):
             (M, S) shared by all sequences: the Static baseline), "fixed" (one-hot at
             `fixed_offset` for every keyframe: the Jumpy baseline).
         fixed_offset: the constant offset in 1…S; required by, and only allowed with, "fixed".
+        offset_evidence: (our addition, "predicted" mode only) in posterior mode, add to the offset
+            logits of keyframe t a per-frame boundary score read off LSTM_inf at each candidate
+            position, ``Σ_k D^{t-1}[k] s[k + a + 1]`` under the soft position ``D^{t-1}`` of the
+            previous keyframe. Finding a direction change is local; counting the frames to it
+            through z and LSTM_key is not, and that is what kept δ from becoming clip-specific
+            (docs/decisions.md). Zero-initialised, so training starts from the paper's model. Prior
+            mode has no future frames and uses the offset head alone.
     """
 
     def __init__(
@@ -77,8 +85,11 @@ class KeyframePredictor(nn.Module):
         attn_scale: bool = True,
         offset_mode: str = "predicted",
         fixed_offset: int | None = None,
+        offset_evidence: bool = False,
     ) -> None:
         super().__init__()
+        if offset_evidence and offset_mode != "predicted":
+            raise ValueError("offset_evidence needs offset_mode='predicted'")
         if offset_mode not in OFFSET_MODES:
             raise ValueError(f"offset_mode must be one of {OFFSET_MODES}, got {offset_mode!r}")
         if (offset_mode == "fixed") != (fixed_offset is not None):
@@ -92,6 +103,7 @@ class KeyframePredictor(nn.Module):
         self.attn_scale = attn_scale
         self.offset_mode = offset_mode
         self.fixed_offset = fixed_offset
+        self.offset_evidence = offset_evidence
 
         # Only the final state of LSTM_cond is used, so it has no output projection.
         self.cond_lstm = LSTMBlock(embed_dim, None, hidden, layers)
@@ -101,6 +113,14 @@ class KeyframePredictor(nn.Module):
         init_forget_bias(self.inference_lstm)
         self.inference_key_head = nn.Linear(2 * hidden, embed_dim)
         self.inference_value_head = nn.Linear(2 * hidden, 2 * latent_dim)
+        if offset_evidence:
+            self.boundary_head = nn.Linear(2 * hidden, 1)
+            nn.init.zeros_(self.boundary_head.weight)
+            nn.init.zeros_(self.boundary_head.bias)
+            self.beyond_score = nn.Parameter(torch.zeros(()))  # positions past the clip's end
+        else:
+            self.boundary_head = None
+            self.register_parameter("beyond_score", None)
         if attn_scale:
             self.attention_inv_temperature = nn.Parameter(torch.tensor(1.0))
         else:
@@ -115,8 +135,8 @@ class KeyframePredictor(nn.Module):
         else:
             self.register_parameter("static_offset_logits", None)
 
-    def infer(self, future_emb: Tensor, lengths: Tensor | None) -> tuple[Tensor, Tensor, Tensor]:
-        """LSTM_inf: attention keys and values for every future frame.
+    def infer(self, future_emb: Tensor, lengths: Tensor | None) -> tuple[Tensor, Tensor, Tensor, Tensor | None]:
+        """LSTM_inf: attention keys and values (and boundary scores) for every future frame.
 
         With `lengths`, the sequences are packed so that frames beyond a clip's length influence
         nothing (the backward direction starts at the last valid frame).
@@ -125,7 +145,8 @@ class KeyframePredictor(nn.Module):
             future_emb: (B, N, E).
             lengths: (B,) valid lengths in 0…N, or None if all N frames are valid.
         Returns:
-            keys (B, N, E), values (B, N, 2Zk), mask (B, N) bool (True = valid).
+            keys (B, N, E), values (B, N, 2Zk), mask (B, N) bool (True = valid), boundary scores
+            (B, N) (None without ``offset_evidence``).
         """
         batch_size, n_frames, _ = future_emb.shape
         projected = self.inference_projection(future_emb)  # (B, N, hidden)
@@ -142,7 +163,8 @@ class KeyframePredictor(nn.Module):
             mask = torch.arange(n_frames, device=future_emb.device) < lengths.to(future_emb.device)[:, None]
         keys = self.inference_key_head(features)  # (B, N, E)
         values = self.inference_value_head(features)  # (B, N, 2Zk)
-        return keys, values, mask
+        scores = self.boundary_head(features).squeeze(-1) if self.boundary_head is not None else None
+        return keys, values, mask, scores
 
     def _offset_logits(self, hidden_outputs: Tensor) -> Tensor:
         """Offset logits of every keyframe for the configured offset mode.
@@ -160,6 +182,29 @@ class KeyframePredictor(nn.Module):
         logits = hidden_outputs.new_full((self.max_offset,), FIXED_OFFSET_OFF_LOGIT)  # (S,)
         logits[self.fixed_offset - 1] = 0.0
         return logits.expand(batch_size, self.n_keyframes, -1)
+
+    def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor) -> Tensor:
+        """Offset logits plus the expected boundary score at each candidate position.
+
+        Args:
+            offset_logits: (B, M, S) from the offset head.
+            scores: (B, N) per-frame boundary scores; mask: (B, N) valid frames.
+        Returns:
+            (B, M, S) logits; keyframe t's depend on δ^1…δ^{t-1} through ``D^{t-1}``.
+        """
+        batch, n_keys, max_offset = offset_logits.shape
+        n_ext = n_keys * max_offset + 1
+        frame_scores = torch.where(mask, scores, self.beyond_score)  # (B, N)
+        extended = self.beyond_score.expand(batch, n_ext).clone()  # (B, L_ext): index k = position k - 1
+        extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
+        previous_pos = initial_position(batch, n_ext, offset_logits)  # D^0
+        logits = []
+        for t in range(n_keys):
+            shifted = shifted_positions(previous_pos, max_offset)  # (B, S, L_ext)
+            logit = offset_logits[:, t] + torch.einsum("bak,bk->ba", shifted, extended)  # (B, S)
+            previous_pos = torch.einsum("bak,ba->bk", shifted, torch.softmax(logit, dim=-1))  # D^t
+            logits.append(logit)
+        return torch.stack(logits, dim=1)
 
     def forward(
         self,
@@ -196,7 +241,7 @@ class KeyframePredictor(nn.Module):
         _, state = self.cond_lstm(cond_emb)  # Init_key = Final_cond: (h, c), each (layers, B, hidden)
         previous_key = cond_emb[:, -1]  # K^{e,0}: (B, E)
         if mode == "posterior":
-            keys, values, mask = self.infer(future_emb, lengths)  # (B, N, E), (B, N, 2Zk), (B, N)
+            keys, values, mask, boundary_scores = self.infer(future_emb, lengths)  # (B, N, ·), (B, N)
             inv_temperature = self.attention_inv_temperature if self.attn_scale else 1.0
         else:
             prior_z = z
@@ -225,6 +270,8 @@ class KeyframePredictor(nn.Module):
             latents.append(latent)
 
         offset_logits = self._offset_logits(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
+        if self.offset_evidence and mode == "posterior":
+            offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask)
         return KeyframeOutput(
             key_emb=torch.stack(key_embs, dim=1),  # (B, M, E)
             offset_probs=torch.softmax(offset_logits, dim=-1),  # (B, M, S)

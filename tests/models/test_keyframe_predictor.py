@@ -134,7 +134,7 @@ def test_first_query_is_the_last_conditioning_embedding():
     cond_emb, future_emb = make_embeddings()
 
     output = predictor(cond_emb, future_emb, sample=False)
-    keys, values, mask = predictor.infer(future_emb, None)
+    keys, values, mask, _ = predictor.infer(future_emb, None)
     queries = torch.cat([cond_emb[:, -1:], output.key_emb[:, :-1]], dim=1)  # (B, M, E)
 
     for t in range(KEYFRAMES):
@@ -232,3 +232,51 @@ def test_invalid_arguments_raise():
         make_predictor(offset_mode="fixed", fixed_offset=MAX_OFFSET + 1)
     with pytest.raises(ValueError, match="offset_mode"):
         make_predictor(offset_mode="learned")
+
+
+def test_boundary_evidence_points_each_keyframe_at_the_next_high_score():
+    predictor = make_predictor(offset_evidence=True)
+    n_future = 2 * MAX_OFFSET
+    scores = torch.full((1, n_future), -20.0)
+    scores[0, [2, 5]] = 20.0  # boundaries at positions 2 and 5
+    mask = torch.ones(1, n_future, dtype=torch.bool)
+    with torch.no_grad():
+        predictor.beyond_score.fill_(-20.0)
+        logits = predictor._add_boundary_evidence(torch.zeros(1, KEYFRAMES, MAX_OFFSET), scores, mask)
+    offsets = logits.argmax(-1)[0] + 1
+    assert offsets[:2].tolist() == [3, 3]  # position -1 → 2 → 5
+
+
+def test_boundary_evidence_treats_padding_as_beyond_the_clip():
+    predictor = make_predictor(offset_evidence=True)
+    scores = torch.zeros(1, 2 * MAX_OFFSET)
+    scores[0, 1] = 50.0  # a high score on a padded frame must not count
+    mask = torch.zeros(1, 2 * MAX_OFFSET, dtype=torch.bool)
+    mask[0, :1] = True
+    with torch.no_grad():
+        predictor.beyond_score.fill_(-3.0)
+        logits = predictor._add_boundary_evidence(torch.zeros(1, KEYFRAMES, MAX_OFFSET), scores, mask)
+    assert torch.allclose(logits[0, 0], torch.tensor([0.0] + [-3.0] * (MAX_OFFSET - 1)))
+
+
+def test_boundary_evidence_starts_as_the_paper_model_and_is_absent_in_prior_mode():
+    torch.manual_seed(0)
+    plain = make_predictor()
+    with_evidence = make_predictor(offset_evidence=True)
+    missing, unexpected = with_evidence.load_state_dict(plain.state_dict(), strict=False)
+    assert set(missing) == {"boundary_head.weight", "boundary_head.bias", "beyond_score"} and not unexpected
+    cond, future = torch.randn(2, 3, EMBED_DIM), torch.randn(2, 2 * MAX_OFFSET, EMBED_DIM)
+    torch.testing.assert_close(
+        with_evidence(cond, future, sample=False).offset_probs, plain(cond, future, sample=False).offset_probs
+    )
+    with torch.no_grad():
+        with_evidence.boundary_head.bias.fill_(1.0)
+        with_evidence.boundary_head.weight.normal_()
+    assert not torch.allclose(with_evidence(cond, future, sample=False).offset_probs,
+                              plain(cond, future, sample=False).offset_probs)
+    torch.testing.assert_close(
+        with_evidence(cond, mode="prior", sample=False).offset_probs,
+        plain(cond, mode="prior", sample=False).offset_probs,
+    )
+    with pytest.raises(ValueError, match="offset_evidence"):
+        make_predictor(offset_mode="static", offset_evidence=True)
