@@ -12,6 +12,7 @@ from typing import Any
 
 import lightning as L
 import torch
+import torch.nn.functional as F
 
 from keyin.eval.f1 import keyframe_scores
 from keyin.eval.segmentation import IGNORE_OFFSET, best_segmentation, embedding_costs, segmentation_offsets
@@ -119,6 +120,7 @@ class KeyframeModule(L.LightningModule):
             "future_emb": future_emb,
             "boundary_emb": embeddings[:, n_cond - 1 :],
             "offset_logits": keys.offset_logits,
+            "boundary_scores": keys.boundary_scores,
             "frames": frames.reshape(n_clips, n_keys, max_offset, -1),
         }
 
@@ -165,8 +167,9 @@ class KeyframeModule(L.LightningModule):
         Optional (``teacher_weight`` > 0, off in the paper's setting): the DP of
         :mod:`keyin.eval.segmentation` on the decoder-free embedding costs gives, for each clip,
         the hard offsets that minimise the interpolation error between the true frames — the
-        optimum the soft loss relaxes. It keeps δ from collapsing to one offset for every clip
-        (docs/decisions.md). Computed on the first ``teacher_clips`` clips (0: all); clips shorter
+        optimum the soft loss relaxes; with ``offset_evidence`` also a per-frame cross-entropy of
+        the boundary scores to its boundaries. It keeps δ from collapsing to one offset for every
+        clip (docs/decisions.md). Computed on the first ``teacher_clips`` clips (0: all); clips shorter
         than N get no target.
         """
         n_clips = self.hparams.teacher_clips or out["boundary_emb"].shape[0]
@@ -174,9 +177,18 @@ class KeyframeModule(L.LightningModule):
         costs = embedding_costs(self.interpolator, boundary_emb).cpu()
         _, positions = best_segmentation(costs, self.hparams.n_keyframes)
         n_future = boundary_emb.shape[1] - 1
+        full = future_length[:n_clips].cpu() == n_future
         targets = segmentation_offsets(positions, n_future, self.hparams.n_keyframes)
-        targets[future_length[:n_clips].cpu() < n_future] = IGNORE_OFFSET
-        return offset_teacher_loss(out["offset_logits"][:n_clips], targets.to(boundary_emb.device))
+        targets[~full] = IGNORE_OFFSET
+        loss = offset_teacher_loss(out["offset_logits"][:n_clips], targets.to(boundary_emb.device))
+        if out["boundary_scores"] is not None and bool(full.any()):
+            # With offset evidence, the per-frame boundary scores learn the segmentation directly.
+            labels = torch.zeros(n_clips, n_future)
+            for row, clip_positions in enumerate(positions):
+                labels[row, clip_positions] = 1.0
+            scores = out["boundary_scores"][:n_clips][full.to(boundary_emb.device)]
+            loss = loss + F.binary_cross_entropy_with_logits(scores, labels[full].to(scores))
+        return loss
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         return self._shared_step(batch, "train")["loss"]

@@ -32,6 +32,8 @@ class KeyframeOutput(NamedTuple):
         log_sigma: (B, M, Zk) posterior log standard deviations (zeros in prior mode).
         z: (B, M, Zk) the latents fed to LSTM_key.
         attention: (B, M, N) attention weights α over the future frames; None in prior mode.
+        boundary_scores: (B, N) per-frame boundary logits of ``offset_evidence`` (posterior mode);
+            None otherwise.
     """
 
     key_emb: Tensor
@@ -41,6 +43,7 @@ class KeyframeOutput(NamedTuple):
     log_sigma: Tensor
     z: Tensor
     attention: Tensor | None
+    boundary_scores: Tensor | None = None
 
 
 class KeyframePredictor(nn.Module):
@@ -280,4 +283,5 @@ class KeyframePredictor(nn.Module):
             log_sigma=torch.stack(log_sigmas, dim=1),
             z=torch.stack(latents, dim=1),
             attention=torch.stack(attentions, dim=1) if attentions else None,  # (B, M, N)
+            boundary_scores=boundary_scores if mode == "posterior" else None,  # (B, N)
         )

@@ -10,13 +10,14 @@ STAGE1 = dict(
 )
 
 
-def keyframe_module(teacher_weight: float) -> KeyframeModule:
+def keyframe_module(teacher_weight: float, offset_evidence: bool = False) -> KeyframeModule:
     torch.manual_seed(0)
     stage1 = dict(InterpolatorModule(**STAGE1).hparams)
     module = KeyframeModule(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,
+        offset_evidence=offset_evidence,
     )
     module.log = module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     return module
@@ -47,3 +48,12 @@ def test_teacher_adds_an_offset_cross_entropy_that_trains_the_predictor_only():
 def test_teacher_is_not_used_in_validation():
     terms = keyframe_module(10.0)._shared_step(batch(), "val")
     assert "teacher" not in terms
+
+
+def test_with_offset_evidence_the_teacher_also_trains_the_boundary_scores():
+    module = keyframe_module(10.0, offset_evidence=True)
+    terms = module._shared_step(batch(), "train")
+    module.zero_grad()
+    terms["teacher"].backward()
+    assert module.predictor.boundary_head.weight.grad.abs().sum() > 0
+    assert module.predictor.boundary_head.bias.grad.abs() > 0
