@@ -82,3 +82,13 @@ def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
     metrics = last_json(result.stdout)
     assert metrics["method"] == "keyin_segmentation" and metrics["n_sequences"] == 8
     assert 0 < metrics["n_predicted"] <= 5  # at most M = 6 gaps, the last one closing the clip
+
+
+def test_a_resumed_run_keeps_the_csv_metrics_of_the_first_process(tmp_path):
+    common = ("scale=smoke", "stage=interpolator", "trainer.enable_progress_bar=false", "hydra.run.dir=run")
+    assert run("train", *common, cwd=tmp_path).returncode == 0
+    assert run("train", *common, "scale.stage1_steps=5", cwd=tmp_path).returncode == 0
+    files = sorted((tmp_path / "run" / "csv").glob("version_*/metrics.csv"))
+    assert len(files) == 2
+    steps = [[int(line.split(",")[1]) for line in f.read_text().splitlines()[1:]] for f in files]
+    assert max(steps[0]) < 3 <= max(steps[1])
