@@ -22,6 +22,7 @@ from torch.utils.data import Subset
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.eval.discovery import evaluate_discoverer
+from keyin.eval.f1 import keyframe_lists
 from keyin.eval.segmentation import SegmentationDiscoverer, best_segmentation, path_cost
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.interpolator import InterpolatorModule
@@ -49,7 +50,7 @@ def main() -> None:
     seconds = time.perf_counter() - started
     batch = next(iter(torch.utils.data.DataLoader(clips, batch_size=len(clips))))
     costs = discoverer.last_costs
-    truth = [torch.nonzero(row).flatten().tolist() for row in batch["keyframes"]]
+    truth = keyframe_lists(batch["keyframes"])
     constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(truth)
     _, dp_positions = best_segmentation(costs, args.keyframes)
     dp = path_cost(costs, dp_positions)

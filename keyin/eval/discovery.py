@@ -9,7 +9,7 @@ import torch
 from rich.progress import Progress
 from torch.utils.data import DataLoader, Dataset
 
-from keyin.eval.f1 import keyframe_scores
+from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.viz.keyframes import save_keyframe_pictures
 
 Discoverer = Callable[[torch.Tensor, torch.Tensor], list[list[int]]]
@@ -31,7 +31,7 @@ def evaluate_discoverer(
         task = bar.add_task("discovering keyframes", total=len(clips))
         for batch in loader:
             predicted.extend(discoverer(batch["frames"], batch["future_length"]))
-            truth.extend(torch.nonzero(row).flatten().tolist() for row in batch["keyframes"])
+            truth.extend(keyframe_lists(batch["keyframes"]))
             bar.update(task, advance=len(batch["frames"]))
     return keyframe_scores(predicted, truth, n_future)
 
@@ -41,6 +41,6 @@ def save_examples(discoverer: Discoverer, clips: Dataset, n_cond: int, folder: P
     """Pictures of the first ``count`` clips with true and discovered keyframes (``keyframes.png/.gif``)."""
     batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
     predicted = discoverer(batch["frames"], batch["future_length"])
-    truth = [torch.nonzero(row).flatten().tolist() for row in batch["keyframes"]]
+    truth = keyframe_lists(batch["keyframes"])
     png, _ = save_keyframe_pictures(folder, batch["frames"], n_cond, truth, predicted)
     return png

@@ -8,9 +8,12 @@ the nearest ground-truth keyframe.
 
 from __future__ import annotations
 
-from typing import Iterable, Sequence
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import torch
 
 
 def tolerant_matches(predicted: Sequence[int], truth: Sequence[int], tolerance: int) -> int:
@@ -28,6 +31,11 @@ def tolerant_matches(predicted: Sequence[int], truth: Sequence[int], tolerance: 
             matches += 1
             next_free += 1
     return matches
+
+
+def keyframe_lists(keyframes: torch.Tensor) -> list[list[int]]:
+    """Per clip, the indices of a (B, N) bool keyframe mask, in order."""
+    return [row.nonzero().flatten().tolist() for row in keyframes]
 
 
 def _f1(tp: float, n_pred: float, n_true: float) -> float:

@@ -50,7 +50,6 @@ def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[lis
     batch, n_future, max_offset = costs.shape
     if n_keyframes * max_offset < n_future:
         raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
-    inf = torch.tensor(float("inf"), dtype=costs.dtype)
     # best[m, b, k]: cheapest cover of 0…k by exactly m gaps; back[m, b, k]: the gap's offset.
     best = torch.full((n_keyframes + 1, batch, n_future + 1), float("inf"), dtype=costs.dtype)
     back = torch.zeros((n_keyframes + 1, batch, n_future + 1), dtype=torch.long)
@@ -59,8 +58,7 @@ def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[lis
         for k in range(1, n_future + 1):
             offsets = torch.arange(1, min(max_offset, k) + 1)  # gap ending at k
             candidates = best[m - 1][:, k - offsets] + costs[:, k - offsets, offsets - 1]  # (B, o)
-            value, arg = candidates.min(dim=1)
-            best[m, :, k] = torch.where(torch.isfinite(value), value, inf)
+            best[m, :, k], arg = candidates.min(dim=1)
             back[m, :, k] = offsets[arg]
     total, n_gaps = best[:, :, n_future].min(dim=0)  # over m
     positions: list[list[int]] = []
@@ -152,6 +150,13 @@ def embedding_costs(interpolator: torch.nn.Module, boundary_emb: Tensor) -> Tens
     return costs
 
 
+def _gaps(row: list[int], n_future: int) -> list[tuple[int, int]]:
+    """(extended start index, offset) of each gap between K^0, the positions in ``row`` and the
+    closing boundary at ``N - 1``."""
+    boundaries = [0, *(p + 1 for p in row), n_future]
+    return [(left, right - left) for left, right in zip(boundaries[:-1], boundaries[1:])]
+
+
 def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
     """Summed cost of given keyframe positions, closed by a final boundary at ``N - 1``.
 
@@ -164,9 +169,7 @@ def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
     batch, n_future, max_offset = costs.shape
     totals = torch.zeros(batch, dtype=costs.dtype)
     for b, row in enumerate(positions):
-        boundaries = [0] + [p + 1 for p in row if p < n_future - 1] + [n_future]
-        for left, right in zip(boundaries[:-1], boundaries[1:]):
-            gap = right - left
+        for left, gap in _gaps([p for p in row if p < n_future - 1], n_future):
             totals[b] += costs[b, left, gap - 1] if 1 <= gap <= max_offset else float("inf")
     return totals
 
@@ -219,7 +222,6 @@ def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes:
     """
     offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
     for b, row in enumerate(positions):
-        boundaries = [-1, *row, n_future - 1]
-        gaps = [right - left for left, right in zip(boundaries[:-1], boundaries[1:])]
-        offsets[b, : len(gaps)] = torch.tensor(gaps[:n_keyframes])
+        gaps = [gap for _, gap in _gaps(row, n_future)][:n_keyframes]
+        offsets[b, : len(gaps)] = torch.tensor(gaps)
     return offsets

@@ -14,7 +14,7 @@ import lightning as L
 import torch
 import torch.nn.functional as F
 
-from keyin.eval.f1 import keyframe_scores
+from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.eval.segmentation import IGNORE_OFFSET, best_segmentation, embedding_costs, segmentation_offsets
 from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
@@ -196,7 +196,7 @@ class KeyframeModule(L.LightningModule):
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._shared_step(batch, "val")
         predicted = self.discover(batch["frames"], batch["future_length"])
-        truth = [torch.nonzero(row).flatten().tolist() for row in batch["keyframes"]]
+        truth = keyframe_lists(batch["keyframes"])
         scores = keyframe_scores(predicted, truth, batch["keyframes"].shape[1])
         # One pattern for every clip is the constant-offset collapse (PROTOTYPE-FINDINGS §3).
         patterns = len({tuple(row) for row in predicted})
