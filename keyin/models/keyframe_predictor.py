@@ -247,6 +247,7 @@ class KeyframePredictor(nn.Module):
             keys, values, mask, boundary_scores = self.infer(future_emb, lengths)  # (B, N, ·), (B, N)
             inv_temperature = self.attention_inv_temperature if self.attn_scale else 1.0
         else:
+            boundary_scores = None  # no future frames to score
             prior_z = z
             if prior_z is None:
                 prior_z = cond_emb.new_zeros(latent_shape)
@@ -273,7 +274,7 @@ class KeyframePredictor(nn.Module):
             latents.append(latent)
 
         offset_logits = self._offset_logits(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
-        if self.offset_evidence and mode == "posterior":
+        if boundary_scores is not None:
             offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask)
         return KeyframeOutput(
             key_emb=torch.stack(key_embs, dim=1),  # (B, M, E)
@@ -283,5 +284,5 @@ class KeyframePredictor(nn.Module):
             log_sigma=torch.stack(log_sigmas, dim=1),
             z=torch.stack(latents, dim=1),
             attention=torch.stack(attentions, dim=1) if attentions else None,  # (B, M, N)
-            boundary_scores=boundary_scores if mode == "posterior" else None,  # (B, N)
+            boundary_scores=boundary_scores,  # (B, N) or None
         )
