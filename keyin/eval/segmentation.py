@@ -17,8 +17,9 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from keyin.losses.soft_keyframe import IGNORE_OFFSET
+
 SPACES = ("pixels", "embeddings")
-IGNORE_OFFSET = -100
 
 
 def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tensor]:
@@ -209,7 +210,7 @@ class SegmentationDiscoverer:
 
 
 def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes: int) -> Tensor:
-    """Offsets of keyframes 1…M for given interior positions closed at ``N - 1``.
+    """Teacher offsets of the keyframes at given interior positions.
 
     Args:
         positions: per clip, increasing interior keyframe positions (as from
@@ -217,11 +218,13 @@ def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes:
         n_future: N.
         n_keyframes: M.
     Returns:
-        (B, M) int64 offsets in 1…S; ``-100`` (``cross_entropy``'s ignore index) for keyframes
-        after the one closing the clip at ``N - 1``, which the segmentation leaves free.
+        (B, M) int64 offsets in 1…S for the interior keyframes; ``IGNORE_OFFSET`` for the rest.
+        The gap that closes the clip at ``N - 1`` gets no target: a keyframe there is no
+        discovered keyframe (the last frame is never one, and evaluation counts it as a false
+        positive), so where the chain goes after the last interior keyframe is left to the soft loss.
     """
     offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
     for b, row in enumerate(positions):
-        gaps = [gap for _, gap in _gaps(row, n_future)][:n_keyframes]
-        offsets[b, : len(gaps)] = torch.tensor(gaps)
+        interior = [gap for _, gap in _gaps(row, n_future)][: min(len(row), n_keyframes)]
+        offsets[b, : len(interior)] = torch.tensor(interior, dtype=torch.long)
     return offsets

@@ -15,6 +15,8 @@ from torch import Tensor
 
 PROB_EPS = 1e-6
 """Clamp of BCE probabilities, coverage and ``c^t`` normalisers (REFERENCE §3.5, §8.12)."""
+IGNORE_OFFSET = -100
+"""A keyframe without a teacher offset (``cross_entropy``'s ignore index)."""
 
 
 def initial_position(batch: int, n_ext: int, like: Tensor) -> Tensor:
@@ -299,14 +301,14 @@ def offset_teacher_loss(offset_logits: Tensor, target_offsets: Tensor) -> Tensor
 
     Args:
         offset_logits: (B, M, S) logits of δ.
-        target_offsets: (B, M) offsets in 1…S; negative entries are ignored.
+        target_offsets: (B, M) offsets in 1…S; ``IGNORE_OFFSET`` (or any value < 1) for none.
     Returns:
         Scalar: mean over the keyframes with a target (0 if none).
     """
-    targets = torch.where(target_offsets > 0, target_offsets - 1, torch.full_like(target_offsets, -100))
+    targets = torch.where(target_offsets > 0, target_offsets - 1, torch.full_like(target_offsets, IGNORE_OFFSET))
     if not bool((targets >= 0).any()):
         return offset_logits.sum() * 0.0
-    return F.cross_entropy(offset_logits.flatten(0, 1).float(), targets.flatten(), ignore_index=-100)
+    return F.cross_entropy(offset_logits.flatten(0, 1).float(), targets.flatten(), ignore_index=IGNORE_OFFSET)
 
 
 def argmax_positions(offset_probs: Tensor) -> Tensor:

@@ -7,6 +7,7 @@ Also the Static and Jumpy baselines, which differ only in where the offset distr
 from typing import NamedTuple
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
@@ -69,12 +70,13 @@ class KeyframePredictor(nn.Module):
             `fixed_offset` for every keyframe: the Jumpy baseline).
         fixed_offset: the constant offset in 1…S; required by, and only allowed with, "fixed".
         offset_evidence: (our addition, "predicted" mode only) in posterior mode, add to the offset
-            logits of keyframe t a per-frame boundary score read off LSTM_inf at each candidate
-            position, ``Σ_k D^{t-1}[k] s[k + a + 1]`` under the soft position ``D^{t-1}`` of the
-            previous keyframe. Finding a direction change is local; counting the frames to it
-            through z and LSTM_key is not, and that is what kept δ from becoming clip-specific
-            (docs/decisions.md). Zero-initialised, so training starts from the paper's model. Prior
-            mode has no future frames and uses the offset head alone.
+            logits of keyframe t the log-probability that the candidate position is the first
+            boundary after the previous keyframe (soft position ``D^{t-1}``), from per-frame
+            boundary scores read off LSTM_inf. Finding a direction change is local; counting the
+            frames to it through z and LSTM_key is not, and that is what kept δ from becoming
+            clip-specific (docs/decisions.md). The boundary head starts at zero (probability 1/2
+            everywhere: a mild preference for short offsets). Prior mode has no future frames and
+            uses the offset head alone.
     """
 
     def __init__(
@@ -187,11 +189,17 @@ class KeyframePredictor(nn.Module):
         return logits.expand(batch_size, self.n_keyframes, -1)
 
     def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor) -> Tensor:
-        """Offset logits plus the expected boundary score at each candidate position.
+        """Offset logits plus the log-probability that offset a + 1 reaches the *first* boundary.
+
+        With ``p[j] = σ(s[j])`` the boundary probability at extended index j, keyframe t after a
+        previous keyframe at k gets ``log p[k+a+1] + Σ_{k<i≤k+a} log(1 - p[i])`` (no boundary
+        skipped), in expectation over the soft position ``D^{t-1}``. The first boundary, not the
+        highest-scoring one within S frames: a softmax over the raw scores jumps over a boundary
+        whenever a later one scores higher (docs/decisions.md).
 
         Args:
             offset_logits: (B, M, S) from the offset head.
-            scores: (B, N) per-frame boundary scores; mask: (B, N) valid frames.
+            scores: (B, N) per-frame boundary logits; mask: (B, N) valid frames.
         Returns:
             (B, M, S) logits; keyframe t's depend on δ^1…δ^{t-1} through ``D^{t-1}``.
         """
@@ -200,11 +208,16 @@ class KeyframePredictor(nn.Module):
         frame_scores = torch.where(mask, scores, self.beyond_score)  # (B, N)
         extended = self.beyond_score.expand(batch, n_ext).clone()  # (B, L_ext): index k = position k - 1
         extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
+        none_through = F.logsigmoid(-extended).cumsum(-1)  # Σ_{i≤j} log(1 - p[i])
+        # log p[j] + Σ_{i<j} log(1 - p[i]); the Σ_{i≤k} part is removed per previous position below.
+        first_at = F.logsigmoid(extended) + F.pad(none_through[:, :-1], (1, 0))
         previous_pos = initial_position(batch, n_ext, offset_logits)  # D^0
         logits = []
         for t in range(n_keys):
             shifted = shifted_positions(previous_pos, max_offset)  # (B, S, L_ext)
-            logit = offset_logits[:, t] + torch.einsum("bak,bk->ba", shifted, extended)  # (B, S)
+            skipped_before = (previous_pos * none_through).sum(-1, keepdim=True)  # (B, 1)
+            evidence = torch.einsum("bak,bk->ba", shifted, first_at) - skipped_before  # (B, S)
+            logit = offset_logits[:, t] + evidence  # (B, S)
             previous_pos = torch.einsum("bak,ba->bk", shifted, torch.softmax(logit, dim=-1))  # D^t
             logits.append(logit)
         return torch.stack(logits, dim=1)

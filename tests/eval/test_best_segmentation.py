@@ -10,7 +10,7 @@ from keyin.eval.segmentation import (
     segment_starts_offsets,
     segmentation_offsets,
 )
-from keyin.losses.soft_keyframe import offset_teacher_loss
+from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
 
 
@@ -78,10 +78,11 @@ def test_interpolation_costs_match_direct_decoding():
     assert torch.isinf(costs[:, 5, 1]).all() and torch.isfinite(costs[:, 5, 0]).all()
 
 
-def test_segmentation_offsets_close_the_clip_and_ignore_the_rest():
-    offsets = segmentation_offsets([[3, 8], [9, 19]], n_future=12, n_keyframes=4)
-    assert offsets[0].tolist() == [4, 5, 3, -100]
+def test_segmentation_offsets_teach_interior_keyframes_only():
+    offsets = segmentation_offsets([[3, 8], [9, 19], []], n_future=12, n_keyframes=4)
+    assert offsets[0].tolist() == [4, 5, IGNORE_OFFSET, IGNORE_OFFSET]  # not the gap closing at 11
     assert offsets[1, :2].tolist() == [10, 10]
+    assert offsets[2].tolist() == [IGNORE_OFFSET] * 4
 
 
 def test_offset_teacher_loss_is_cross_entropy_on_kept_keyframes():

@@ -247,6 +247,42 @@ def test_boundary_evidence_points_each_keyframe_at_the_next_high_score():
     assert offsets[:2].tolist() == [3, 3]  # position -1 → 2 → 5
 
 
+def first_boundary_log_probs(boundary_logits: list[float], previous: int, max_offset: int) -> torch.Tensor:
+    """Brute force: log P(the first boundary after extended index ``previous`` is at previous + a + 1)."""
+    p = torch.sigmoid(torch.tensor(boundary_logits, dtype=torch.float64))
+    out = []
+    for a in range(max_offset):
+        none_between = torch.prod(1 - p[previous + 1 : previous + a + 1])
+        out.append(torch.log(p[previous + a + 1] * none_between))
+    return torch.stack(out)
+
+
+def test_boundary_evidence_is_the_first_boundary_log_probability():
+    torch.manual_seed(0)
+    predictor = make_predictor(offset_evidence=True)
+    n_future = 2 * MAX_OFFSET
+    scores = torch.randn(1, n_future) * 2
+    mask = torch.ones(1, n_future, dtype=torch.bool)
+    base = torch.randn(1, KEYFRAMES, MAX_OFFSET)
+    with torch.no_grad():
+        predictor.beyond_score.fill_(-1.5)
+        logits = predictor._add_boundary_evidence(base, scores, mask)
+    extended = [-1.5] + scores[0].tolist() + [-1.5] * (KEYFRAMES * MAX_OFFSET - n_future)
+    # Keyframe 1 starts from K^0 (extended index 0) with certainty.
+    expected = base[0, 0].double() + first_boundary_log_probs(extended, 0, MAX_OFFSET)
+    torch.testing.assert_close(logits[0, 0].double(), expected, rtol=1e-5, atol=1e-5)
+
+
+def test_boundary_evidence_does_not_skip_a_boundary_for_a_higher_later_score():
+    predictor = make_predictor(offset_evidence=True)
+    scores = torch.full((1, 2 * MAX_OFFSET), -20.0)
+    scores[0, 0], scores[0, 1] = 3.0, 20.0  # a sure boundary at 0, a surer one right after
+    mask = torch.ones_like(scores, dtype=torch.bool)
+    with torch.no_grad():
+        logits = predictor._add_boundary_evidence(torch.zeros(1, KEYFRAMES, MAX_OFFSET), scores, mask)
+    assert logits.argmax(-1)[0, :2].tolist() == [0, 0]  # positions 0 then 1, not 1 first
+
+
 def test_boundary_evidence_treats_padding_as_beyond_the_clip():
     predictor = make_predictor(offset_evidence=True)
     scores = torch.zeros(1, 2 * MAX_OFFSET)
@@ -256,19 +292,17 @@ def test_boundary_evidence_treats_padding_as_beyond_the_clip():
     with torch.no_grad():
         predictor.beyond_score.fill_(-3.0)
         logits = predictor._add_boundary_evidence(torch.zeros(1, KEYFRAMES, MAX_OFFSET), scores, mask)
-    assert torch.allclose(logits[0, 0], torch.tensor([0.0] + [-3.0] * (MAX_OFFSET - 1)))
+    extended = [-3.0, 0.0] + [-3.0] * (KEYFRAMES * MAX_OFFSET - 1)
+    torch.testing.assert_close(logits[0, 0].double(), first_boundary_log_probs(extended, 0, MAX_OFFSET))
 
 
-def test_boundary_evidence_starts_as_the_paper_model_and_is_absent_in_prior_mode():
+def test_boundary_evidence_changes_posterior_offsets_only():
     torch.manual_seed(0)
     plain = make_predictor()
     with_evidence = make_predictor(offset_evidence=True)
     missing, unexpected = with_evidence.load_state_dict(plain.state_dict(), strict=False)
     assert set(missing) == {"boundary_head.weight", "boundary_head.bias", "beyond_score"} and not unexpected
     cond, future = torch.randn(2, 3, EMBED_DIM), torch.randn(2, 2 * MAX_OFFSET, EMBED_DIM)
-    torch.testing.assert_close(
-        with_evidence(cond, future, sample=False).offset_probs, plain(cond, future, sample=False).offset_probs
-    )
     with torch.no_grad():
         with_evidence.boundary_head.bias.fill_(1.0)
         with_evidence.boundary_head.weight.normal_()
