@@ -52,6 +52,11 @@ def run_dir() -> Path:
     return Path(HydraConfig.get().runtime.output_dir)
 
 
+def config_choice(group: str) -> str | None:
+    """The option chosen for a config group in the current job (e.g. ``scale`` → ``cpu``)."""
+    return HydraConfig.get().runtime.choices.get(group)
+
+
 def write_metrics(metrics: Mapping[str, Any], folder: Path) -> Path:
     """Write ``metrics.json`` atomically and print the metrics as the last line of output."""
     path = Path(folder) / "metrics.json"

@@ -53,17 +53,18 @@ def check_common(cfg: Mapping[str, Any]) -> None:
 
 
 STAGES = ("both", "interpolator", "keyframes")
-SCALE_COUNTS = ("batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "val_every", "checkpoint_every", "val_clips", "eval_clips")
+SCALE_COUNTS = ("batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "val_every", "checkpoint_every", "val_clips", "eval_clips")
 
 
 def check_training(cfg: Mapping[str, Any]) -> None:
     """What keyin-train needs beyond the common checks."""
     if cfg["stage"] not in STAGES:
         raise ConfigError(f"stage={cfg['stage']!r}; allowed: {', '.join(STAGES)}")
-    if not cfg["model"]["trainable"]:
+    two_stages = cfg["model"]["trainable"] and "module" not in cfg["model"]
+    if cfg["stage"] != "both" and not two_stages:
         raise ConfigError(
-            f"model={cfg['model']['name']} needs no training; evaluate it with "
-            f"`keyin-eval model={cfg['model']['name']}`"
+            f"stage={cfg['stage']} needs a two-stage model (keyin, jumpy, static); "
+            f"model={cfg['model']['name']} has {'one stage' if cfg['model']['trainable'] else 'no training'}: drop stage="
         )
     for key in SCALE_COUNTS:
         require_positive_int(cfg["scale"][key], f"scale.{key}")

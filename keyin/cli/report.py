@@ -1,10 +1,93 @@
-"""keyin-report: the paper's tables from a sweep; not built yet."""
+"""keyin-report <sweep dir>: the paper's Table 1 from a sweep's metrics.json files.
 
-from keyin.cli.pending import not_available
+Writes ``table1.md``, ``table1.csv``, ``table1_f1.png`` (bars with the paper's numbers) and, per
+dataset, ``examples_<dataset>.png`` (each method's keyframes on the first test clips) into
+``--out`` (default: ``<sweep dir>/report``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from datetime import date
+from pathlib import Path
+
+import torch
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+
+from keyin.cli.app import fail
+from keyin.data.datamodule import split_clips
+from keyin.data.hdf5 import atomic_write_text
+from keyin.errors import KeyinError
+from keyin.eval.report import collect_metrics, csv_table, markdown_table, method_sort_key, summarise
+from keyin.viz.report import save_f1_bars, save_method_comparison
 
 
-def main() -> None:
-    not_available("keyin-report", "Table 1 baselines and keyin-report")
+def example_predictions(records: list[dict], dataset: str) -> tuple[Path, dict[str, list[list[int]]], list[list[int]]]:
+    """The lowest seed's ``predictions.json`` of every method on ``dataset``.
+
+    Returns:
+        a job dir (for its config), method → per-clip predictions, the true keyframes.
+    """
+    predicted, truth, job = {}, None, None
+    for record in sorted(records, key=lambda r: r["seed"]):
+        path = Path(record["path"]) / "predictions.json"
+        if record["dataset"] != dataset or record["method"] in predicted or not path.is_file():
+            continue
+        saved = json.loads(path.read_text())
+        if record["method"] in saved["predicted"]:
+            predicted[record["method"]] = saved["predicted"][record["method"]]
+            truth, job = saved["truth"], Path(record["path"])
+    return job, {method: predicted[method] for method in sorted(predicted, key=method_sort_key)}, truth
+
+
+def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
+    """The first ``count`` test clips of the job's dataset, rebuilt from its saved Hydra config."""
+    cfg = OmegaConf.load(job / ".hydra" / "config.yaml")
+    dataset = cfg.dataset
+    clips = split_clips(dataset, instantiate(dataset.generator), "test", None, cfg.data_dir)
+    frames = torch.stack([clips[i]["frames"] for i in range(min(count, len(clips)))])
+    return frames, dataset.n_cond
+
+
+def report(sweep: Path, out: Path, n_examples: int) -> list[Path]:
+    records = collect_metrics(sweep)
+    rows = summarise(records)
+    out.mkdir(parents=True, exist_ok=True)
+    header = (
+        f"# Keyframe discovery F1 (paper Table 1)\n\nFrom `{sweep}` by `keyin-report {sweep}` on {date.today()}; "
+        f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips. Scales: "
+        f"{', '.join(sorted({str(r.get('scale')) for r in records}))}.\n\n"
+    )
+    written = [out / "table1.md", out / "table1.csv"]
+    atomic_write_text(written[0], header + markdown_table(rows))
+    atomic_write_text(written[1], csv_table(rows))
+    written.append(save_f1_bars(rows, out / "table1_f1.png"))
+    for dataset in sorted({row.dataset for row in rows}):
+        job, predicted, truth = example_predictions(records, dataset)
+        if not predicted or not (job / ".hydra" / "config.yaml").is_file():
+            continue
+        clips, n_cond = example_clips(job, min(n_examples, len(truth)))
+        predicted = {method: rows_[: len(clips)] for method, rows_ in predicted.items()}
+        written.append(save_method_comparison(clips, n_cond, truth[: len(clips)], predicted, out / f"examples_{dataset}.png"))
+    print(header + markdown_table(rows))
+    return written
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="keyin-report", description=__doc__.split("\n\n")[0])
+    parser.add_argument("sweep", type=Path, help="a sweep dir (e.g. runs/multirun/brownian_table1)")
+    parser.add_argument("--out", type=Path, default=None, help="output dir (default: <sweep>/report)")
+    parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures")
+    args = parser.parse_args(argv)
+    if not args.sweep.is_dir():
+        fail(f"{args.sweep} is not a directory; pass the sweep dir of keyin-train -m")
+    try:
+        for path in report(args.sweep, args.out or args.sweep / "report", args.examples):
+            print(f"wrote {path}")
+    except (KeyinError, ValueError) as err:
+        fail(str(err))
 
 
 if __name__ == "__main__":

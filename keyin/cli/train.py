@@ -1,28 +1,63 @@
-"""keyin-train experiment=<name>: stage 1 (interpolator), stage 2 (keyframes), then keyframe F1."""
+"""keyin-train experiment=<name>: train the chosen model (KEYIN's two stages, or Surprise's one),
+then score its keyframes on the test split. Untrained baselines (Random, Constant) are only scored,
+so one sweep covers every row of Table 1.
+"""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Callable
 
 import hydra
 import lightning as L
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import CONFIG_DIR, run_dir, user_errors, write_metrics
+from keyin.cli.app import CONFIG_DIR, config_choice, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.data.datamodule import ClipDataModule, split_clips
-from keyin.eval.discovery import evaluate_discoverer, save_examples
+from keyin.eval.discovery import evaluate_discoverer, save_examples, save_predictions
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.run import fit_stage
+
+Discoverers = dict[str, Callable]
+
+
+def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder: Path) -> Discoverers:
+    """KEYIN, Jumpy, Static: stage 1 (into ``stage1_dir`` if set, else this run), then stage 2."""
+    scale = cfg.scale
+    stage1_folder = Path(cfg.stage1_dir) if cfg.stage1_dir else folder
+    if cfg.stage in ("both", "interpolator"):
+        fit_stage(
+            instantiate(cfg.model.interpolator),
+            datamodule=datamodule(scale.stage1_batch_size),
+            max_steps=scale.stage1_steps,
+            **dict(common, run_dir=stage1_folder),
+        )
+    if cfg.stage == "interpolator":
+        return {}
+    stage1 = load_checkpoint(
+        cfg.interpolator_ckpt or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt", "interpolator"
+    )
+    module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
+    module.load_stage1(stage1["state_dict"])
+    fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
+    return module.discoverers(cfg.model.name)
 
 
 @user_errors
 def train(cfg: DictConfig) -> dict | None:
     check_common(cfg)
     check_training(cfg)
-    L.seed_everything(cfg.seed, workers=True)
     folder, scale, dataset = run_dir(), cfg.scale, cfg.dataset
+    finished = folder / "metrics.json"
+    if cfg.skip_finished and finished.is_file():
+        metrics = json.loads(finished.read_text())
+        print(f"{folder} finished earlier; skipped (delete its metrics.json to run it again)")
+        print(json.dumps(metrics, sort_keys=True))
+        return metrics
+    L.seed_everything(cfg.seed, workers=True)
     generator = instantiate(dataset.generator)
     clips = lambda split, size: split_clips(dataset, generator, split, size, cfg.data_dir)  # noqa: E731
     datamodule = lambda batch_size: ClipDataModule(  # noqa: E731
@@ -36,27 +71,29 @@ def train(cfg: DictConfig) -> dict | None:
         logger=instantiate(cfg.logger) if cfg.logger else False,
         config=OmegaConf.to_container(cfg, resolve=True),
     )
-    if cfg.stage in ("both", "interpolator"):
-        fit_stage(
-            instantiate(cfg.model.interpolator),
-            datamodule=datamodule(scale.stage1_batch_size),
-            max_steps=scale.stage1_steps,
-            **common,
-        )
-    if cfg.stage == "interpolator":
+    if not cfg.model.trainable:
+        discoverers = {cfg.model.name: instantiate(cfg.model.discoverer)}
+    elif "module" in cfg.model:  # one stage (Surprise)
+        module = instantiate(cfg.model.module)
+        fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=cfg.model.steps, **common)
+        discoverers = module.discoverers(cfg.model.name)
+    else:
+        discoverers = train_two_stages(cfg, datamodule, common, folder)
+    if not discoverers or not cfg.evaluate:
         return None
-    stage1 = load_checkpoint(
-        cfg.interpolator_ckpt or folder / "checkpoints" / "interpolator" / "last.ckpt", "interpolator"
-    )
-    module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
-    module.load_stage1(stage1["state_dict"])
-    fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
-    if not cfg.evaluate:
-        return None
-    test_clips = clips("test", scale.eval_clips)
-    scores = evaluate_discoverer(module.discover, test_clips, dataset.n_future)
-    save_examples(module.discover, test_clips, dataset.n_cond, folder)
-    metrics = dict(scores, method=cfg.model.name, dataset=dataset.name)
+    return evaluate_all(discoverers, clips("test", scale.eval_clips), cfg, folder)
+
+
+def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: Path) -> dict:
+    """Score every discoverer; the first is the method, the rest its ``variants`` in metrics.json."""
+    dataset = cfg.dataset
+    scores = {name: evaluate_discoverer(find, test_clips, dataset.n_future) for name, find in discoverers.items()}
+    (method, main), *others = scores.items()
+    save_examples(discoverers[method], test_clips, dataset.n_cond, folder)
+    save_predictions(discoverers, test_clips, folder)
+    metrics = dict(main, method=method, dataset=dataset.name, seed=cfg.seed, scale=config_choice("scale"))
+    if others:
+        metrics["variants"] = dict(others)
     write_metrics(metrics, folder)
     return metrics
 

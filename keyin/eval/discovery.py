@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Callable
 
@@ -9,6 +10,7 @@ import torch
 from rich.progress import Progress
 from torch.utils.data import DataLoader, Dataset
 
+from keyin.data.hdf5 import atomic_write_text
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.viz.keyframes import save_keyframe_pictures
 
@@ -34,6 +36,23 @@ def evaluate_discoverer(
             truth.extend(keyframe_lists(batch["keyframes"]))
             bar.update(task, advance=len(batch["frames"]))
     return keyframe_scores(predicted, truth, n_future)
+
+
+@torch.no_grad()
+def save_predictions(discoverers: dict[str, Discoverer], clips: Dataset, folder: Path, count: int = 8) -> Path:
+    """``predictions.json``: the true and each method's keyframes on the first ``count`` clips.
+
+    ``keyin-report`` draws its method-comparison figure from these files.
+    """
+    batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
+    record = {
+        "clips": list(range(len(batch["frames"]))),
+        "truth": keyframe_lists(batch["keyframes"]),
+        "predicted": {name: find(batch["frames"], batch["future_length"]) for name, find in discoverers.items()},
+    }
+    path = Path(folder) / "predictions.json"
+    atomic_write_text(path, json.dumps(record))
+    return path
 
 
 @torch.no_grad()

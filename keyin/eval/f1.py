@@ -81,3 +81,22 @@ def keyframe_scores(
         "n_predicted": n_pred / max(n_clips, 1),
         "n_true": n_true / max(n_clips, 1),
     }
+
+
+def discovery_summary(predicted: list[list[int]], keyframes: torch.Tensor) -> dict[str, float]:
+    """What a training run logs about discovered keyframes on a validation batch.
+
+    Args:
+        predicted: per clip, discovered future indices.
+        keyframes: (B, N) bool ground-truth mask.
+    Returns:
+        f1, f1_tol1, n_predicted, and distinct_patterns: how many different keyframe lists the
+        batch got (1 for every clip is the constant-offset collapse, PROTOTYPE-FINDINGS §3).
+    """
+    scores = keyframe_scores(predicted, keyframe_lists(keyframes), keyframes.shape[1])
+    return {
+        "f1": scores["f1"],
+        "f1_tol1": scores["f1_tol1"],
+        "n_predicted": scores["n_predicted"],
+        "distinct_patterns": float(len({tuple(row) for row in predicted})),
+    }

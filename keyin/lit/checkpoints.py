@@ -66,9 +66,11 @@ def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tu
     # The modules import this file's callback, so they are imported here.
     from keyin.lit.interpolator import InterpolatorModule
     from keyin.lit.keyframes import KeyframeModule
+    from keyin.lit.surprise import SurpriseModule
 
     checkpoint = load_checkpoint(path, stage)
-    module_class = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule}[checkpoint[STAGE_KEY]]
+    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule}
+    module_class = stages[checkpoint[STAGE_KEY]]
     module = module_class(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
     return module.eval(), checkpoint[CONFIG_KEY]

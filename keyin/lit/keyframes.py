@@ -8,15 +8,15 @@ keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import lightning as L
 import torch
 import torch.nn.functional as F
 
-from keyin.eval.f1 import keyframe_lists, keyframe_scores
-from keyin.eval.segmentation import IGNORE_OFFSET, best_segmentation, embedding_costs, segmentation_offsets
-from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
+from keyin.eval.f1 import discovery_summary
+from keyin.eval.segmentation import best_segmentation, embedding_costs, segmentation_offsets
+from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
@@ -196,19 +196,8 @@ class KeyframeModule(L.LightningModule):
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._shared_step(batch, "val")
         predicted = self.discover(batch["frames"], batch["future_length"])
-        truth = keyframe_lists(batch["keyframes"])
-        scores = keyframe_scores(predicted, truth, batch["keyframes"].shape[1])
-        # One pattern for every clip is the constant-offset collapse (PROTOTYPE-FINDINGS §3).
-        patterns = len({tuple(row) for row in predicted})
-        self.log_dict(
-            {
-                "val/f1": scores["f1"],
-                "val/f1_tol1": scores["f1_tol1"],
-                "val/n_predicted": scores["n_predicted"],
-                "val/distinct_patterns": float(patterns),
-            },
-            prog_bar=True,
-        )
+        summary = discovery_summary(predicted, batch["keyframes"])
+        self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True)
 
     @torch.no_grad()
     def discover(self, clips: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
@@ -227,6 +216,10 @@ class KeyframeModule(L.LightningModule):
         return [
             [p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())
         ]
+
+    def discoverers(self, name: str) -> dict[str, Callable]:
+        """The discovery methods to score, by name (one: ``discover``)."""
+        return {name: self.discover}
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
         trainable = [p for p in self.parameters() if p.requires_grad]

@@ -5,6 +5,7 @@ from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator, InterpolatorPosterior
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
 from keyin.models.recurrent import MLP, LSTMBlock, LSTMState, state_from_vector
+from keyin.models.svg import SVGCore
 
 __all__ = [
     "ConvDecoder",
@@ -16,6 +17,7 @@ __all__ = [
     "LSTMBlock",
     "LSTMState",
     "MLP",
+    "SVGCore",
     "attention_posterior",
     "state_from_vector",
 ]

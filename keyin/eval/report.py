@@ -1,0 +1,131 @@
+"""The paper's Table 1 from a sweep: collect ``metrics.json`` files, aggregate over seeds, format.
+
+Every training or evaluation job writes ``metrics.json`` (method, dataset, seed, scores, and the
+``variants`` of a method, e.g. Surprise without its index shift). A table row is one
+(dataset, method): the mean and standard deviation over seeds, with the paper's figure beside it.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+# Paper Table 1 (keyframe F1; REFERENCE §5.3). Jumpy is not in it (its keyframes are Constant's).
+PAPER_TABLE1 = {
+    "brownian": {"random": 0.15, "constant": 0.17, "static": 0.21, "surprise": 0.73, "keyin": 0.84},
+    "pushing": {"random": 0.18, "constant": 0.23, "static": 0.18, "surprise": 0.10, "keyin": 0.30},
+}
+METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
+SCORES = ("f1", "f1_tol1", "precision", "recall", "n_predicted")
+
+
+@dataclass
+class TableRow:
+    """One (dataset, method) over its seeds."""
+
+    dataset: str
+    method: str
+    seeds: list[int]
+    mean: dict[str, float]
+    std: dict[str, float]
+    paper_f1: float | None
+
+
+def collect_metrics(root: Path) -> list[dict[str, Any]]:
+    """Every job's metrics under ``root``, one record per method and variant.
+
+    Raises:
+        ValueError: if no metrics.json is found, or one lacks method/dataset/f1.
+    """
+    records = []
+    for path in sorted(Path(root).rglob("metrics.json")):
+        metrics = json.loads(path.read_text())
+        missing = [key for key in ("method", "dataset", "f1") if key not in metrics]
+        if missing:
+            raise ValueError(f"{path} lacks {', '.join(missing)}: not a keyin metrics.json")
+        common = {key: metrics.get(key) for key in ("dataset", "seed", "scale")}
+        common.update(seed=metrics.get("seed", 0), path=str(path.parent))
+        records.append({**metrics, **common})
+        for name, scores in metrics.get("variants", {}).items():
+            records.append({**scores, **common, "method": name})
+    if not records:
+        raise ValueError(f"no metrics.json under {root}; run the sweep first (keyin-train -m ...)")
+    return records
+
+
+def method_sort_key(method: str) -> tuple[int, str]:
+    """Table order: the paper's rows first (variants beside their method), then the rest."""
+    base = method.split("_")[0]
+    return (METHOD_ORDER.index(base) if base in METHOD_ORDER else len(METHOD_ORDER), method)
+
+
+def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
+    """Mean and standard deviation (n - 1; 0 for one seed) over seeds of each (dataset, method).
+
+    Raises:
+        ValueError: if a (dataset, method, seed) appears twice (two sweeps under one root).
+    """
+    groups: dict[tuple[str, str], dict[int, dict[str, Any]]] = {}
+    for record in records:
+        seeds = groups.setdefault((record["dataset"], record["method"]), {})
+        if record["seed"] in seeds:
+            raise ValueError(
+                f"{record['method']} on {record['dataset']} with seed {record['seed']} appears twice "
+                f"({seeds[record['seed']]['path']} and {record['path']}); report one sweep at a time"
+            )
+        seeds[record["seed"]] = record
+    rows = []
+    for (dataset, method), by_seed in sorted(groups.items(), key=lambda item: (item[0][0], method_sort_key(item[0][1]))):
+        values = {score: np.array([float(r.get(score, math.nan)) for r in by_seed.values()]) for score in SCORES}
+        ddof = 1 if len(by_seed) > 1 else 0
+        rows.append(
+            TableRow(
+                dataset=dataset,
+                method=method,
+                seeds=sorted(by_seed),
+                mean={score: float(v.mean()) for score, v in values.items()},
+                std={score: float(v.std(ddof=ddof)) for score, v in values.items()},
+                paper_f1=PAPER_TABLE1.get(dataset, {}).get(method),
+            )
+        )
+    return rows
+
+
+def _paper(value: float | None) -> str:
+    return "–" if value is None else f"{value:.2f}"
+
+
+def markdown_table(rows: list[TableRow]) -> str:
+    """Table 1 as Markdown: F1 mean ± std over seeds, the paper's F1, and companions."""
+    lines = [
+        "| dataset | method | F1 (ours) | F1 (paper) | ±1 F1 | precision | recall | keyframes/clip | seeds |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        m, s = row.mean, row.std
+        lines.append(
+            f"| {row.dataset} | {row.method} | {m['f1']:.3f} ± {s['f1']:.3f} | {_paper(row.paper_f1)} | "
+            f"{m['f1_tol1']:.3f} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
+            f"{len(row.seeds)} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def csv_table(rows: list[TableRow]) -> str:
+    """The same table as CSV, one column per mean and std."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["dataset", "method", "seeds", "paper_f1", *(f"{s}_{k}" for s in SCORES for k in ("mean", "std"))])
+    for row in rows:
+        writer.writerow(
+            [row.dataset, row.method, " ".join(map(str, row.seeds)), "" if row.paper_f1 is None else row.paper_f1]
+            + [f"{value:.6g}" for s in SCORES for value in (row.mean[s], row.std[s])]
+        )
+    return out.getvalue()

@@ -1,0 +1,132 @@
+"""The Surprise baseline: SVG-FP trained on whole clips, keyframes at peaks of its KL (REFERENCE §4).
+
+One stage: encoder, decoder and the SVG core learn to predict every frame from the one before and
+a latent from the posterior ``q(z_t | I_≤t)``, with a KL to the fixed prior N(0, I). Where the
+next frame is unpredictable (the ball turns) the posterior has to carry information, so its KL
+peaks; :mod:`keyin.eval.surprise` turns the peaks into keyframes.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Callable
+
+import lightning as L
+import torch
+import torch.nn.functional as F
+
+from keyin.eval.f1 import discovery_summary
+from keyin.eval.surprise import surprise_keyframes
+from keyin.losses.soft_keyframe import gaussian_kl
+from keyin.models import ConvDecoder, ConvEncoder, SVGCore
+
+
+class SurpriseModule(L.LightningModule):
+    """SVG-FP with KEYIN's encoder/decoder sizes; ``discover`` picks the M largest KL peaks.
+
+    Args:
+        n_keyframes: M, keyframes per clip.
+        latent_dim: Z of the per-step latent.
+        beta: weight of the KL (sums over pixels and latent dims, like KEYIN's losses).
+        shift: added to a peak's future index (-1: the frame before the one that reveals the turn).
+    """
+
+    stage = "surprise"
+
+    def __init__(
+        self,
+        image_size: int,
+        channels: int,
+        n_cond: int,
+        n_future: int,
+        n_keyframes: int,
+        embed_dim: int,
+        conv_width: int,
+        coord_channels: bool,
+        norm: str,
+        latent_dim: int,
+        lstm_hidden: int,
+        predictor_layers: int,
+        posterior_layers: int,
+        beta: float,
+        lr: float,
+        shift: int = -1,
+    ) -> None:
+        super().__init__()
+        self.save_hyperparameters()
+        conv = dict(
+            image_size=image_size, channels=channels, width=conv_width, embed_dim=embed_dim,
+            coord_channels=coord_channels, norm=norm,
+        )
+        self.encoder = ConvEncoder(**conv)
+        self.decoder = ConvDecoder(**conv)
+        self.core = SVGCore(embed_dim, latent_dim, lstm_hidden, predictor_layers, posterior_layers)
+
+    def _valid(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
+        """(B, L) True for the conditioning frames and the valid future frames."""
+        steps = torch.arange(clips.shape[1], device=clips.device)
+        return steps[None] < self.hparams.n_cond + future_length.to(clips.device)[:, None]
+
+    def _terms(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Per-step reconstruction BCE and KL of frames 1 … L-1, zero on padding, and the valid
+        mask: (B, L-1) each."""
+        clips = batch["frames"]
+        valid = self._valid(clips, batch["future_length"])[:, 1:]
+        predicted, mu, log_sigma = self.core(self.encoder(clips))
+        logits = self.decoder(predicted.flatten(0, 1)).view_as(clips[:, 1:])
+        bce = F.binary_cross_entropy_with_logits(logits, clips[:, 1:], reduction="none").flatten(2).sum(-1)
+        kl = gaussian_kl(mu[:, 1:], log_sigma[:, 1:])
+        return bce * valid, kl * valid, valid
+
+    def _log_terms(self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+        loss = (bce.sum() + self.hparams.beta * kl.sum()) / bce.shape[0]
+        n_steps = valid.sum()
+        self.log_dict(
+            {
+                f"{stage}/loss": loss,
+                f"{stage}/bce_per_frame": bce.sum() / n_steps,
+                f"{stage}/kl_per_step": kl.sum() / n_steps,  # → 0 is the KL collapse to watch for
+            },
+            prog_bar=stage == "train",
+        )
+        return loss
+
+    def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
+        return self._log_terms("train", *self._terms(batch))
+
+    def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
+        bce, kl, valid = self._terms(batch)
+        self._log_terms("val", bce, kl, valid)
+        # Is the KL where the turns are? Mean KL at the frames after a vertex over that elsewhere.
+        n_cond = self.hparams.n_cond
+        reveals = F.pad(batch["keyframes"], (n_cond, 0))[:, :-1].bool()  # (B, L-1): step t+1 after vertex t
+        future_kl = kl.masked_fill(~valid, float("nan"))
+        future_kl[:, : n_cond - 1] = float("nan")  # the conditioning frames have no labels
+        self.log("val/kl_reveal_ratio", future_kl[reveals].nanmean() / future_kl[~reveals].nanmean().clamp_min(1e-9))
+        predicted = self.discover(batch["frames"], batch["future_length"])
+        summary = discovery_summary(predicted, batch["keyframes"])
+        self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True)
+
+    @torch.no_grad()
+    def surprise(self, clips: torch.Tensor) -> torch.Tensor:
+        """(B, L) KL of the posterior to the prior at every step of (B, L, C, H, W) clips."""
+        mu, log_sigma = self.core.posterior_stats(self.encoder(clips.to(self.device)))
+        return gaussian_kl(mu, log_sigma)
+
+    @torch.no_grad()
+    def discover(self, clips: torch.Tensor, future_length: torch.Tensor, shift: int | None = None) -> list[list[int]]:
+        """Keyframe positions: the M largest KL peaks, shifted by ``shift`` (default: the module's)."""
+        was_training = self.training
+        self.eval()
+        kl = self.surprise(clips).cpu()
+        self.train(was_training)
+        shift = self.hparams.shift if shift is None else shift
+        return surprise_keyframes(kl, future_length.cpu(), self.hparams.n_cond, self.hparams.n_keyframes, shift)
+
+    def discoverers(self, name: str) -> dict[str, Callable]:
+        """The method as configured, and the other index reading REFERENCE §4 asks to report."""
+        other = 0 if self.hparams.shift != 0 else -1
+        return {name: self.discover, f"{name}_shift{other}": functools.partial(self.discover, shift=other)}
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr, betas=(0.9, 0.999))

@@ -1,0 +1,79 @@
+"""Figures of ``keyin-report``: Table 1 as a bar chart and the methods' keyframes on test clips."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from keyin.eval.report import TableRow  # noqa: E402
+from keyin.viz.keyframes import marked_frames  # noqa: E402
+
+
+def save_f1_bars(rows: Sequence[TableRow], path: Path) -> Path:
+    """Bars of our F1 (mean ± std over seeds) per method, the paper's F1 as a black tick."""
+    datasets = sorted({row.dataset for row in rows})
+    fig, axes = plt.subplots(1, len(datasets), figsize=(4.5 * len(datasets), 3.4), squeeze=False)
+    for ax, dataset in zip(axes[0], datasets):
+        mine = [row for row in rows if row.dataset == dataset]
+        x = np.arange(len(mine))
+        ax.bar(x, [r.mean["f1"] for r in mine], yerr=[r.std["f1"] for r in mine], capsize=3,
+               color="tab:blue", label="ours")
+        paper = [(i, r.paper_f1) for i, r in enumerate(mine) if r.paper_f1 is not None]
+        if paper:
+            ax.scatter(*zip(*paper), marker="_", s=400, color="black", linewidths=2, label="paper", zorder=3)
+        ax.set_xticks(x, [r.method for r in mine], rotation=30, ha="right")
+        ax.set_ylim(0, 1)
+        ax.set_ylabel("keyframe F1 (exact)")
+        ax.set_title(dataset)
+        ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def save_method_comparison(
+    clips: torch.Tensor,
+    n_cond: int,
+    truth: Sequence[Sequence[int]],
+    predicted: Mapping[str, Sequence[Sequence[int]]],
+    path: Path,
+) -> Path:
+    """For each clip, one strip of its future frames per method (like the paper's Fig. 3-5).
+
+    Borders: green = ground truth only, red = the method's only, yellow = both.
+
+    Args:
+        clips: (K, L, C, H, W) in [0, 1].
+        truth: per clip, true future keyframe indices.
+        predicted: method → per clip, its future keyframe indices.
+    """
+    methods = list(predicted)
+    n_rows = len(clips) * len(methods)
+    height = clips.shape[-2] + 4
+    fig, axes = plt.subplots(n_rows, 1, figsize=(clips.shape[1] * 0.42, n_rows * 0.55), squeeze=False)
+    for k, clip in enumerate(clips):
+        for m, method in enumerate(methods):
+            frames = marked_frames(clip, n_cond, truth[k], predicted[method][k])[n_cond:]  # (N, h, w, 3)
+            ax = axes[k * len(methods) + m, 0]
+            ax.imshow(np.concatenate(list(frames), axis=1), interpolation="nearest")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_ylabel(method if m else f"clip {k}\n{method}", rotation=0, ha="right", va="center",
+                          fontsize=7, labelpad=4)
+            ax.set_ylim(height - 0.5, -0.5)
+    fig.subplots_adjust(left=0.12, right=0.995, top=0.995, bottom=0.005, hspace=0.08)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
