@@ -13,7 +13,7 @@ from keyin.cli.checks import check_common, require_positive_int
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
-from keyin.eval.discovery import evaluate_discoverer, save_examples
+from keyin.eval.discovery import score_methods
 from keyin.eval.segmentation import SegmentationDiscoverer
 from keyin.lit.checkpoints import load_trained_module
 
@@ -30,11 +30,12 @@ def evaluate(cfg: DictConfig) -> dict:
     require_positive_int(cfg.batch_size, "batch_size")
     if cfg.ckpt is not None:
         module, trained = load_trained_module(cfg.ckpt, stage=None)
+        name = trained["model"]["name"]
         if module.stage == "interpolator":  # exact best segmentation under the interpolator
-            discoverer = SegmentationDiscoverer(module, trained["dataset"]["n_keyframes"])
-            method = f"{trained['model']['name']}_segmentation"
+            n_keyframes = trained["dataset"]["n_keyframes"]
+            discoverers = {f"{name}_segmentation": SegmentationDiscoverer(module, n_keyframes)}
         else:
-            discoverer, method = module.discover, trained["model"]["name"]
+            discoverers = module.discoverers(name)
         dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
     elif OmegaConf.select(cfg, "model") is None:
         raise ConfigError("choose what to evaluate: model=random|constant or ckpt=<checkpoint path>")
@@ -44,23 +45,18 @@ def evaluate(cfg: DictConfig) -> dict:
             f"with ckpt=<path>"
         )
     else:
-        discoverer, method, dataset = instantiate(cfg.model.discoverer), cfg.model.name, cfg.dataset
+        discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
     clips = ShardClips(
         eval_files(cfg, dataset.name),
         (dataset.image_size, dataset.image_size, dataset.channels),
         dataset.n_cond,
         dataset.n_future,
     )
-    scores = evaluate_discoverer(
-        discoverer,
-        clips,
-        dataset.n_future,
-        batch_size=cfg.batch_size,
-        num_workers=cfg.num_workers,
-        progress=cfg.progress,
+    metrics = score_methods(
+        discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(),
+        batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress,
     )
-    save_examples(discoverer, clips, dataset.n_cond, run_dir())
-    metrics = dict(scores, method=method, dataset=dataset.name)
+    metrics.update(dataset=dataset.name, seed=cfg.seed)
     write_metrics(metrics, run_dir())
     return metrics
 

@@ -17,7 +17,7 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli.app import CONFIG_DIR, config_choice, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.data.datamodule import ClipDataModule, split_clips
-from keyin.eval.discovery import evaluate_discoverer, save_examples, save_predictions
+from keyin.eval.discovery import score_methods
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.run import fit_stage
 
@@ -85,15 +85,10 @@ def train(cfg: DictConfig) -> dict | None:
 
 
 def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: Path) -> dict:
-    """Score every discoverer; the first is the method, the rest its ``variants`` in metrics.json."""
+    """Score every discoverer on the test clips and write metrics.json."""
     dataset = cfg.dataset
-    scores = {name: evaluate_discoverer(find, test_clips, dataset.n_future) for name, find in discoverers.items()}
-    (method, main), *others = scores.items()
-    save_examples(discoverers[method], test_clips, dataset.n_cond, folder)
-    save_predictions(discoverers, test_clips, folder)
-    metrics = dict(main, method=method, dataset=dataset.name, seed=cfg.seed, scale=config_choice("scale"))
-    if others:
-        metrics["variants"] = dict(others)
+    metrics = score_methods(discoverers, test_clips, dataset.n_cond, dataset.n_future, folder)
+    metrics.update(dataset=dataset.name, seed=cfg.seed, scale=config_choice("scale"))
     write_metrics(metrics, folder)
     return metrics
 

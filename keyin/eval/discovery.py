@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import torch
 from rich.progress import Progress
@@ -63,3 +63,30 @@ def save_examples(discoverer: Discoverer, clips: Dataset, n_cond: int, folder: P
     truth = keyframe_lists(batch["keyframes"])
     png, _ = save_keyframe_pictures(folder, batch["frames"], n_cond, truth, predicted)
     return png
+
+
+def score_methods(
+    discoverers: dict[str, Discoverer],
+    clips: Dataset,
+    n_cond: int,
+    n_future: int,
+    folder: Path,
+    **loader: Any,
+) -> dict[str, Any]:
+    """Score every discoverer, save pictures of the first and everyone's example predictions.
+
+    Args:
+        discoverers: method name → discoverer; the first is the method, the rest its variants.
+        loader: ``batch_size``, ``num_workers``, ``progress`` for :func:`evaluate_discoverer`.
+    Returns:
+        The first method's scores with ``method`` and, if there are more, ``variants``
+        (name → scores).
+    """
+    scores = {name: evaluate_discoverer(find, clips, n_future, **loader) for name, find in discoverers.items()}
+    (method, main), *others = scores.items()
+    save_examples(discoverers[method], clips, n_cond, folder)
+    save_predictions(discoverers, clips, folder)
+    metrics: dict[str, Any] = dict(main, method=method)
+    if others:
+        metrics["variants"] = dict(others)
+    return metrics

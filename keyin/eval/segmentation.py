@@ -151,6 +151,53 @@ def embedding_costs(interpolator: torch.nn.Module, boundary_emb: Tensor) -> Tens
     return costs
 
 
+def boundary_segment_costs(scores: Tensor, max_offset: int) -> Tensor:
+    """Segment costs under which the best segmentation is the MAP of per-frame boundary scores.
+
+    With boundary probability ``p_j = σ(s_j)`` per future position, the log-likelihood of a set of
+    interior boundaries is ``Σ_boundaries log p + Σ_others log(1 - p)``; up to a constant, each
+    boundary adds its logit ``s_j``. A segment ending at extended index ``e < N`` (position
+    ``e - 1``) therefore costs ``-s[e - 1]``; the segment closing the clip at ``N`` costs nothing.
+
+    Args:
+        scores: (B, N) boundary logits of the future positions.
+        max_offset: S.
+    Returns:
+        (B, N, S) costs for :func:`best_segmentation`, ``inf`` where a segment leaves the clip.
+    """
+    batch, n_future = scores.shape
+    start, offset = segment_starts_offsets(n_future, max_offset)
+    end = start + offset  # extended index of the segment's closing boundary
+    per_segment = torch.where(end < n_future, -scores[:, (end - 1).clamp(max=n_future - 1)], scores.new_zeros(()))
+    costs = scores.new_full((batch, n_future, max_offset), float("inf"))
+    costs[:, start, offset - 1] = per_segment
+    return costs
+
+
+def boundary_keyframes(scores: Tensor, lengths: Tensor, n_keyframes: int, max_offset: int) -> list[list[int]]:
+    """The most likely keyframe positions under per-frame boundary scores, at most M gaps of at most S.
+
+    Clips of different valid lengths are decoded separately, each closing at its own last frame.
+
+    Args:
+        scores: (B, N) boundary logits; lengths: (B,) valid future frames.
+    Returns:
+        Per clip, the interior keyframe positions (the clip's last frame is never one).
+    """
+    positions: list[list[int]] = [[] for _ in range(len(scores))]
+    for length in lengths.unique().tolist():
+        rows = (lengths == length).nonzero().flatten()
+        if length < 1:
+            continue
+        if n_keyframes * max_offset < length:
+            raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover a clip of {length} frames")
+        costs = boundary_segment_costs(scores[rows, :length].detach().float().cpu(), min(max_offset, length))
+        _, decoded = best_segmentation(costs, n_keyframes)
+        for row, clip_positions in zip(rows.tolist(), decoded):
+            positions[row] = clip_positions
+    return positions
+
+
 def _gaps(row: list[int], n_future: int) -> list[tuple[int, int]]:
     """(extended start index, offset) of each gap between K^0, the positions in ``row`` and the
     closing boundary at ``N - 1``."""

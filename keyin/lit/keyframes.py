@@ -8,6 +8,7 @@ keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable
 
 import lightning as L
@@ -15,12 +16,13 @@ import torch
 import torch.nn.functional as F
 
 from keyin.eval.f1 import discovery_summary
-from keyin.eval.segmentation import best_segmentation, embedding_costs, segmentation_offsets
+from keyin.eval.segmentation import best_segmentation, boundary_keyframes, embedding_costs, segmentation_offsets
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
 FROZEN = ("encoder", "decoder", "interpolator")
+DISCOVERY_RULES = ("offsets", "boundaries")
 
 
 class KeyframeModule(L.LightningModule):
@@ -46,8 +48,13 @@ class KeyframeModule(L.LightningModule):
         teacher_weight: float = 0.0,
         teacher_clips: int = 0,
         offset_evidence: bool = False,
+        discovery: str = "offsets",
     ) -> None:
         super().__init__()
+        if discovery not in DISCOVERY_RULES:
+            raise ValueError(f"discovery must be one of {DISCOVERY_RULES}, got {discovery!r}")
+        if discovery == "boundaries" and not offset_evidence:
+            raise ValueError("discovery='boundaries' needs offset_evidence (the boundary scores)")
         self.save_hyperparameters()
         frozen = InterpolatorModule(**stage1)
         self.encoder, self.decoder, self.interpolator = frozen.encoder, frozen.decoder, frozen.interpolator
@@ -195,13 +202,23 @@ class KeyframeModule(L.LightningModule):
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._shared_step(batch, "val")
-        predicted = self.discover(batch["frames"], batch["future_length"])
-        summary = discovery_summary(predicted, batch["keyframes"])
-        self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True)
+        for name, find in self.discoverers("").items():
+            summary = discovery_summary(find(batch["frames"], batch["future_length"]), batch["keyframes"])
+            self.log_dict({f"val/{key}{name}": value for key, value in summary.items()}, prog_bar=not name)
 
     @torch.no_grad()
-    def discover(self, clips: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
-        """Keyframe positions: posterior mean, argmax offsets, positions inside each clip (§3.9)."""
+    def discover(
+        self, clips: torch.Tensor, future_length: torch.Tensor, discovery: str | None = None
+    ) -> list[list[int]]:
+        """Keyframe positions in posterior mode with the posterior mean, inside each clip.
+
+        Args:
+            discovery: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9) or
+                "boundaries" (with ``offset_evidence``: the most likely keyframe set under
+                LSTM_inf's per-frame boundary scores, within M gaps of at most S); default: the
+                module's ``discovery``.
+        """
+        discovery = discovery or self.hparams.discovery
         was_training = self.training
         self.eval()
         embeddings = self.encoder(clips.to(self.device))
@@ -210,16 +227,27 @@ class KeyframeModule(L.LightningModule):
             embeddings[:, :n_cond], embeddings[:, n_cond:], future_length.to(self.device),
             mode="posterior", sample=False,
         )
-        positions = argmax_positions(keys.offset_probs).cpu()
         self.train(was_training)
         self.freeze_stage1()
+        if discovery == "boundaries":
+            return boundary_keyframes(
+                keys.boundary_scores, future_length.cpu(), self.hparams.n_keyframes, self.predictor.max_offset
+            )
+        positions = argmax_positions(keys.offset_probs).cpu()
         return [
             [p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())
         ]
 
     def discoverers(self, name: str) -> dict[str, Callable]:
-        """The discovery methods to score, by name (one: ``discover``)."""
-        return {name: self.discover}
+        """The discovery rules to score, by method name: the configured one first; with offset
+        evidence also the other, as ``<name>_<rule>``."""
+        rules = [self.hparams.discovery]
+        if self.hparams.offset_evidence:
+            rules += [rule for rule in DISCOVERY_RULES if rule != self.hparams.discovery]
+        return {
+            name if index == 0 else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
+            for index, rule in enumerate(rules)
+        }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
         trainable = [p for p in self.parameters() if p.requires_grad]

@@ -5,6 +5,7 @@ import torch
 
 from keyin.eval.segmentation import (
     best_segmentation,
+    boundary_keyframes,
     interpolation_costs,
     path_cost,
     segment_starts_offsets,
@@ -94,3 +95,35 @@ def test_offset_teacher_loss_is_cross_entropy_on_kept_keyframes():
     assert loss.item() == pytest.approx(expected.item(), rel=1e-6)
     loss.backward()
     assert logits.grad[0, 2].abs().sum() == 0 and logits.grad[1, 1:].abs().sum() == 0
+
+
+def brute_force_boundaries(scores: list[float], n_keyframes: int, max_offset: int) -> tuple[float, list[int]]:
+    """Enumerate every interior boundary set; score Σ log p + Σ log(1 - p) over positions 0…N-2."""
+    n_future = len(scores)
+    p = torch.sigmoid(torch.tensor(scores, dtype=torch.float64))
+    best = (-float("inf"), [])
+    for size in range(n_keyframes):
+        for chosen in itertools.combinations(range(n_future - 1), size):
+            gaps = [b - a for a, b in zip((-1, *chosen), (*chosen, n_future - 1))]
+            if max(gaps) > max_offset:
+                continue
+            loglik = sum(float(torch.log(p[j] if j in chosen else 1 - p[j])) for j in range(n_future - 1))
+            best = max(best, (loglik, list(chosen)))
+    return best
+
+
+def test_boundary_keyframes_are_the_map_boundary_set_under_the_gap_limits():
+    torch.manual_seed(3)
+    scores = torch.randn(6, 9) * 2
+    for n_keyframes, max_offset in ((3, 4), (4, 3), (5, 9)):
+        decoded = boundary_keyframes(scores, torch.full((6,), 9), n_keyframes, max_offset)
+        for row, positions in zip(scores.tolist(), decoded):
+            _, expected = brute_force_boundaries(row, n_keyframes, max_offset)
+            assert positions == expected
+
+
+def test_boundary_keyframes_close_each_clip_at_its_own_length():
+    scores = torch.full((2, 10), -5.0)
+    scores[:, [2, 7]] = 5.0
+    decoded = boundary_keyframes(scores, torch.tensor([10, 5]), n_keyframes=4, max_offset=5)
+    assert decoded == [[2, 7], [2]]  # position 7 is padding in the second clip

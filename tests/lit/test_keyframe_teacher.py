@@ -1,3 +1,4 @@
+import pytest
 import torch
 
 from keyin.lit.interpolator import InterpolatorModule
@@ -10,14 +11,14 @@ STAGE1 = dict(
 )
 
 
-def keyframe_module(teacher_weight: float, offset_evidence: bool = False) -> KeyframeModule:
+def keyframe_module(teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets") -> KeyframeModule:
     torch.manual_seed(0)
     stage1 = dict(InterpolatorModule(**STAGE1).hparams)
     module = KeyframeModule(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,
-        offset_evidence=offset_evidence,
+        offset_evidence=offset_evidence, discovery=discovery,
     )
     module.log = module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     return module
@@ -57,3 +58,19 @@ def test_with_offset_evidence_the_teacher_also_trains_the_boundary_scores():
     terms["teacher"].backward()
     assert module.predictor.boundary_head.weight.grad.abs().sum() > 0
     assert module.predictor.boundary_head.bias.grad.abs() > 0
+
+
+def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored():
+    module = keyframe_module(0.0, offset_evidence=True, discovery="boundaries")
+    with torch.no_grad():
+        module.predictor.boundary_head.bias.fill_(-5.0)  # no boundary anywhere but where the
+        module.predictor.boundary_head.weight.zero_()  # per-frame scores are forced below
+    assert list(module.discoverers("keyin")) == ["keyin", "keyin_offsets"]
+    data = batch()
+    found = module.discover(data["frames"], data["future_length"])
+    assert found == [[2], [2], [2]]  # gaps ≤ S = 3 over 6 (or 4) frames force one interior keyframe
+    offsets = module.discoverers("keyin")["keyin_offsets"](data["frames"], data["future_length"])
+    assert all(all(0 <= p < n for p in row) for row, n in zip(offsets, [6, 6, 4]))
+    assert list(keyframe_module(0.0).discoverers("jumpy")) == ["jumpy"]
+    with pytest.raises(ValueError, match="needs offset_evidence"):
+        keyframe_module(0.0, discovery="boundaries")
