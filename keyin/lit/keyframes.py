@@ -15,9 +15,9 @@ import lightning as L
 import torch
 import torch.nn.functional as F
 
-from keyin.eval.f1 import discovery_summary
+from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.eval.segmentation import best_segmentation, boundary_keyframes, embedding_costs, segmentation_offsets
-from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
+from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_frames, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
@@ -237,6 +237,41 @@ class KeyframeModule(L.LightningModule):
         return [
             [p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())
         ]
+
+    @torch.no_grad()
+    def validation_pictures(self, batch: dict[str, torch.Tensor], count: int) -> dict[str, Any]:
+        """What the validation pictures show for the first ``count`` clips of a batch.
+
+        Returns:
+            ``clips`` (3·count, L, C, H, W): per clip the ground truth, the posterior-mean
+            reconstruction (argmax offsets) and a prior sample, conditioning frames first;
+            ``truth`` / ``predicted``: keyframes to mark on each of those rows (discovered ones on
+            the first two, the sample's own on the third); ``offsets`` (B, M) argmax offsets of the
+            whole batch, for the histogram.
+        """
+        was_training = self.training
+        self.eval()
+        clips, lengths = batch["frames"].to(self.device), batch["future_length"].to(self.device)
+        posterior = self(clips, lengths, mode="posterior", sample=False)
+        prior = self(clips[:count], lengths[:count], mode="prior", sample=True)
+        self.train(was_training)
+        self.freeze_stage1()
+        discovered = self.discover(clips[:count], lengths[:count])
+        truth = keyframe_lists(batch["keyframes"][:count])
+        sampled = argmax_positions(prior["offset_probs"]).tolist()
+        videos = [clips[:count], self._argmax_video(clips, posterior)[:count], self._argmax_video(clips[:count], prior)]
+        return {
+            "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
+            "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
+            "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
+            "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
+        }
+
+    def _argmax_video(self, clips: torch.Tensor, out: dict[str, torch.Tensor]) -> torch.Tensor:
+        """(B, L, C, H, W): the conditioning frames, then the frames of the argmax offsets."""
+        n_cond = self.hparams.stage1["n_cond"]
+        future = argmax_frames(out["offset_probs"], out["frames"], clips.shape[1] - n_cond)  # (B, N, D)
+        return torch.cat([clips[:, :n_cond], future.view_as(clips[:, n_cond:])], dim=1)
 
     def discoverers(self, name: str) -> dict[str, Callable]:
         """The discovery rules to score, by method name: the configured one first; with offset

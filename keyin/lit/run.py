@@ -11,6 +11,7 @@ from lightning.pytorch.callbacks import ModelCheckpoint
 
 from keyin.errors import KeyinError
 from keyin.lit.checkpoints import RunConfigInCheckpoint
+from keyin.lit.pictures import ValidationPictures
 
 
 class FiniteLoss(L.Callback):
@@ -53,7 +54,7 @@ def fit_stage(
         val_check_interval=val_every,
         check_val_every_n_epoch=None,
         logger=logger,
-        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss()],
+        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures")],
         default_root_dir=str(run_dir),
     )
     trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last.is_file() else None)

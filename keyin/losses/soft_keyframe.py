@@ -321,3 +321,20 @@ def argmax_positions(offset_probs: Tensor) -> Tensor:
         frame.
     """
     return (offset_probs.argmax(dim=-1) + 1).cumsum(dim=-1) - 1
+
+
+def argmax_frames(offset_probs: Tensor, predicted: Tensor, n_future: int) -> Tensor:
+    """The video of the most likely offsets (REFERENCE §3.9): the soft mixture at one-hot δ.
+
+    Args:
+        offset_probs: (B, M, S).
+        predicted: (B, M, S, D) interpolated frames.
+        n_future: N.
+    Returns:
+        (B, N, D): frame j is the output of the segment whose argmax offsets cover position j
+        (zeros past the last keyframe).
+    """
+    hard = F.one_hot(offset_probs.argmax(dim=-1), offset_probs.shape[-1]).to(predicted)
+    _, frame_pos = position_distributions(hard)
+    mixed, _ = soft_frames(frame_pos, predicted, n_future)
+    return mixed

@@ -1,4 +1,4 @@
-"""Figures of ``keyin-report``: Table 1 as a bar chart and the methods' keyframes on test clips."""
+"""Charts: Table 1 as bars, the methods' keyframes on test clips, the histogram of chosen offsets."""
 
 from __future__ import annotations
 
@@ -75,5 +75,33 @@ def save_method_comparison(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def save_offset_histogram(offsets: torch.Tensor, max_offset: int, path: Path, title: str = "") -> Path:
+    """How often each offset 1…S is chosen, one group of bars per keyframe t.
+
+    A single tall bar per keyframe, the same for every clip, is the constant-offset collapse.
+
+    Args:
+        offsets: (B, M) chosen offsets in 1…S.
+    """
+    n_keys = offsets.shape[1]
+    fig, ax = plt.subplots(figsize=(6, 3))
+    width = 0.8 / n_keys
+    values = np.arange(1, max_offset + 1)
+    for t in range(n_keys):
+        counts = np.bincount(offsets[:, t].numpy(), minlength=max_offset + 1)[1:]
+        ax.bar(values + (t - (n_keys - 1) / 2) * width, counts / len(offsets), width, label=f"t={t + 1}")
+    ax.set_xticks(values)
+    ax.set_xlabel("offset")
+    ax.set_ylabel("fraction of clips")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
     return path

@@ -8,6 +8,7 @@ import torch
 import torch.nn.functional as F
 
 from keyin.losses.soft_keyframe import (
+    argmax_frames,
     argmax_positions,
     bce_sum,
     gaussian_kl,
@@ -520,3 +521,19 @@ def test_key_image_term_needs_decoded_keyframes():
     result = keyin_loss(**args, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05)
     assert "key_img" not in result
     assert_close(result["key"], result["key_emb"] + 0.05 * result["kl"])
+
+
+def test_argmax_frames_take_each_position_from_the_segment_that_covers_it():
+    torch.manual_seed(0)
+    offsets = torch.tensor([[2, 3, 1], [1, 1, 1]])  # positions 1, 4, 5 and 0, 1, 2
+    probs = F.one_hot(offsets - 1, 4).float() * 0.7 + 0.1  # argmax = the offsets, not one-hot
+    predicted = torch.rand(2, 3, 4, 5)
+    frames = argmax_frames(probs, predicted, n_future=6)
+    for b, row in enumerate(offsets.tolist()):
+        position = -1
+        for t, offset in enumerate(row):
+            for i in range(offset):
+                if position + 1 + i < 6:
+                    torch.testing.assert_close(frames[b, position + 1 + i], predicted[b, t, i])
+            position += offset
+        assert frames[b, position + 1 :].abs().sum() == 0  # nothing past the last keyframe

@@ -3,7 +3,7 @@
 import torch
 import torch.nn.functional as F
 
-from keyin.losses.soft_keyframe import gaussian_kl, keyin_loss
+from keyin.losses.soft_keyframe import argmax_frames, gaussian_kl, keyin_loss
 from keyin.models import KeyframePredictor
 
 E, M, S, N, Z, D = 8, 6, 10, 30, 4, 12
@@ -30,6 +30,7 @@ def test_jumpy_soft_loss_equals_hard_indexing():
     # Hard indexing: frame j is output j mod c of segment j div c; keyframe t sits at t·c - 1.
     hard_frames = torch.stack([inter[:, j // c, j % c] for j in range(N)], dim=1)
     torch.testing.assert_close(terms["soft_frames"], hard_frames)
+    torch.testing.assert_close(argmax_frames(out.offset_probs, inter, N), hard_frames)
     hard_inter = F.binary_cross_entropy(hard_frames, frames, reduction="sum") / batch
     torch.testing.assert_close(terms["inter"], hard_inter)
     inside = N // c  # keyframes 1…5 inside the clip, the 6th beyond it
