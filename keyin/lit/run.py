@@ -10,7 +10,7 @@ import lightning as L
 from lightning.pytorch.callbacks import ModelCheckpoint
 
 from keyin.errors import KeyinError
-from keyin.lit.checkpoints import RunConfigInCheckpoint
+from keyin.lit.checkpoints import RunConfigInCheckpoint, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
 
 
@@ -57,6 +57,10 @@ def fit_stage(
         callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures")],
         default_root_dir=str(run_dir),
     )
-    trainer.fit(module, datamodule=datamodule, ckpt_path=str(last) if last.is_file() else None)
+    resume = last if last.is_file() else None
+    if resume is not None:
+        load_checkpoint(resume, module.stage)  # one clear error for a foreign, corrupt or unsafe file
+    # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
+    trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
     trainer.save_checkpoint(last)  # the final state, whatever the checkpoint cadence
     return last
