@@ -1,0 +1,42 @@
+"""The Surprise module: padded frames never enter its loss, and its keyframes come from its KL."""
+
+import torch
+
+from keyin.eval.surprise import surprise_keyframes
+from keyin.lit.surprise import SurpriseModule
+
+
+def module() -> SurpriseModule:
+    torch.manual_seed(0)
+    return SurpriseModule(
+        image_size=8, channels=1, n_cond=2, n_future=6, n_keyframes=3, embed_dim=8, conv_width=4,
+        coord_channels=True, norm="group", latent_dim=3, lstm_hidden=16, predictor_layers=1,
+        posterior_layers=1, beta=0.1, lr=1e-3,
+    )
+
+
+def test_padded_frames_add_nothing_to_the_loss():
+    model = module()
+    frames = torch.rand(2, 8, 1, 8, 8)
+    lengths = torch.tensor([6, 3])
+    torch.manual_seed(1)
+    bce, kl, valid = model._terms({"frames": frames, "future_length": lengths})
+    assert bce.shape == kl.shape == (2, 7)
+    assert valid[1].tolist() == [True] * 4 + [False] * 3  # frames 1…4 of 2 + 3 valid
+    assert (bce[1, 4:] == 0).all() and (kl[1, 4:] == 0).all() and (bce[0] > 0).all()
+    changed = frames.clone()
+    changed[1, 5:] = torch.rand(3, 1, 8, 8)  # only padding differs
+    torch.manual_seed(1)
+    bce_changed, _, _ = model._terms({"frames": changed, "future_length": lengths})
+    torch.testing.assert_close(bce_changed[1], bce[1])
+
+
+def test_discovery_is_the_peak_picking_of_the_posterior_kl():
+    model = module().eval()
+    frames, lengths = torch.rand(3, 8, 1, 8, 8), torch.tensor([6, 6, 4])
+    kl = model.surprise(frames)
+    assert kl.shape == (3, 8) and (kl >= 0).all()
+    assert model.discover(frames, lengths) == surprise_keyframes(kl, lengths, 2, 3, shift=-1)
+    found = model.discoverers("surprise")["surprise_shift0"](frames, lengths)
+    assert found == surprise_keyframes(kl, lengths, 2, 3, shift=0)
+    assert all(len(row) == 3 and all(0 <= p < n for p in row) for row, n in zip(found, lengths.tolist()))
