@@ -28,6 +28,9 @@ class SurpriseModule(L.LightningModule):
         n_keyframes: M, keyframes per clip.
         latent_dim: Z of the per-step latent.
         beta: weight of the KL (sums over pixels and latent dims, like KEYIN's losses).
+        ae_weight: weight of an auto-encoding BCE of every valid frame (as in KEYIN's stage 1);
+            without it the decoder learns to draw the ball only slowly, and while the predictions
+            are blurry the posterior has nothing to add (docs/baselines.md). 0: SVG-FP's loss.
         shift: added to a peak's future index (-1: the frame before the one that reveals the turn).
     """
 
@@ -51,6 +54,7 @@ class SurpriseModule(L.LightningModule):
         beta: float,
         lr: float,
         shift: int = -1,
+        ae_weight: float = 0.0,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -67,19 +71,27 @@ class SurpriseModule(L.LightningModule):
         steps = torch.arange(clips.shape[1], device=clips.device)
         return steps[None] < self.hparams.n_cond + future_length.to(clips.device)[:, None]
 
-    def _terms(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Per-step reconstruction BCE and KL of frames 1 … L-1, zero on padding, and the valid
-        mask: (B, L-1) each."""
+    def _terms(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Per-step prediction BCE and KL of frames 1 … L-1 (B, L-1), zero on padding, the valid
+        mask (B, L-1), and the summed auto-encoding BCE of the valid frames (scalar)."""
         clips = batch["frames"]
-        valid = self._valid(clips, batch["future_length"])[:, 1:]
-        predicted, mu, log_sigma = self.core(self.encoder(clips))
+        valid_all = self._valid(clips, batch["future_length"])
+        valid = valid_all[:, 1:]
+        embeddings = self.encoder(clips)
+        predicted, mu, log_sigma = self.core(embeddings)
         logits = self.decoder(predicted.flatten(0, 1)).view_as(clips[:, 1:])
         bce = F.binary_cross_entropy_with_logits(logits, clips[:, 1:], reduction="none").flatten(2).sum(-1)
         kl = gaussian_kl(mu[:, 1:], log_sigma[:, 1:])
-        return bce * valid, kl * valid, valid
+        autoencoding = clips.new_zeros(())
+        if self.hparams.ae_weight > 0:
+            frames = clips[valid_all]
+            autoencoding = F.binary_cross_entropy_with_logits(self.decoder(embeddings[valid_all]), frames, reduction="sum")
+        return bce * valid, kl * valid, valid, autoencoding
 
-    def _log_terms(self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
-        loss = (bce.sum() + self.hparams.beta * kl.sum()) / bce.shape[0]
+    def _log_terms(
+        self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor, autoencoding: torch.Tensor
+    ) -> torch.Tensor:
+        loss = (bce.sum() + self.hparams.beta * kl.sum() + self.hparams.ae_weight * autoencoding) / bce.shape[0]
         n_steps = valid.sum()
         self.log_dict(
             {
@@ -95,8 +107,8 @@ class SurpriseModule(L.LightningModule):
         return self._log_terms("train", *self._terms(batch))
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
-        bce, kl, valid = self._terms(batch)
-        self._log_terms("val", bce, kl, valid)
+        bce, kl, valid, autoencoding = self._terms(batch)
+        self._log_terms("val", bce, kl, valid, autoencoding)
         # Is the KL where the turns are? Mean KL at the frames after a vertex over that elsewhere.
         n_cond = self.hparams.n_cond
         reveals = F.pad(batch["keyframes"], (n_cond, 0))[:, :-1].bool()  # (B, L-1): step t+1 after vertex t

@@ -20,14 +20,14 @@ def test_padded_frames_add_nothing_to_the_loss():
     frames = torch.rand(2, 8, 1, 8, 8)
     lengths = torch.tensor([6, 3])
     torch.manual_seed(1)
-    bce, kl, valid = model._terms({"frames": frames, "future_length": lengths})
+    bce, kl, valid, _ = model._terms({"frames": frames, "future_length": lengths})
     assert bce.shape == kl.shape == (2, 7)
     assert valid[1].tolist() == [True] * 4 + [False] * 3  # frames 1…4 of 2 + 3 valid
     assert (bce[1, 4:] == 0).all() and (kl[1, 4:] == 0).all() and (bce[0] > 0).all()
     changed = frames.clone()
     changed[1, 5:] = torch.rand(3, 1, 8, 8)  # only padding differs
     torch.manual_seed(1)
-    bce_changed, _, _ = model._terms({"frames": changed, "future_length": lengths})
+    bce_changed, _, _, _ = model._terms({"frames": changed, "future_length": lengths})
     torch.testing.assert_close(bce_changed[1], bce[1])
 
 
