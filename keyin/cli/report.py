@@ -69,7 +69,7 @@ def report(sweep: Path, out: Path, n_examples: int) -> list[Path]:
         if not predicted or not (job / ".hydra" / "config.yaml").is_file():
             continue
         clips, n_cond = example_clips(job, min(n_examples, len(truth)))
-        predicted = {method: rows_[: len(clips)] for method, rows_ in predicted.items()}
+        predicted = {method: per_clip[: len(clips)] for method, per_clip in predicted.items()}
         written.append(save_method_comparison(clips, n_cond, truth[: len(clips)], predicted, out / f"examples_{dataset}.png"))
     print(header + markdown_table(rows))
     return written
