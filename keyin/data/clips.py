@@ -18,6 +18,7 @@ import torch
 from torch.utils.data import Dataset
 
 from keyin.data.hdf5 import ShardInfo, check_compatible, inspect_shard
+from keyin.errors import DatasetFormatError
 
 
 def clip_item(arrays: dict[str, np.ndarray], n_cond: int, n_future: int) -> dict[str, torch.Tensor]:
@@ -69,6 +70,11 @@ class ShardClips(Dataset):
             check_compatible(info, image_shape, n_cond, n_future)
         self.n_cond, self.n_future = n_cond, n_future
         self.offsets = np.cumsum([0] + [info.n for info in self.infos])
+        if self.offsets[-1] == 0:
+            raise DatasetFormatError(
+                f"no clips in {', '.join(str(p) for p in paths) or 'an empty file list'}; pass a file "
+                f"with clips or generate some with `keyin-generate` (e.g. splits='{{test: 1000}}')"
+            )
         self._handles: dict[int, h5py.File] = {}
 
     def __len__(self) -> int:

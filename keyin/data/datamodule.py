@@ -11,6 +11,7 @@ from torch.utils.data import DataLoader, Dataset
 from keyin.data.clips import GeneratedClips, ShardClips
 from keyin.data.generate import split_seed
 from keyin.data.hdf5 import split_files
+from keyin.errors import DatasetFormatError
 
 
 def split_clips(
@@ -35,6 +36,12 @@ class ClipDataModule(L.LightningDataModule):
 
     def __init__(self, train: Dataset, val: Dataset, batch_size: int, num_workers: int) -> None:
         super().__init__()
+        if len(train) < batch_size:  # drop_last would leave no batch at all
+            raise DatasetFormatError(
+                f"the train split has {len(train)} clips, fewer than one batch of {batch_size}; give it "
+                f"more (dataset.splits.train=, then `keyin-generate` for file datasets) or lower "
+                f"scale.batch_size / scale.stage1_batch_size"
+            )
         self.train, self.val = train, val
         self.batch_size, self.num_workers = batch_size, num_workers
 

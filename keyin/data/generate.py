@@ -20,7 +20,14 @@ from typing import Any, Mapping, Protocol
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from keyin.data.hdf5 import MANIFEST_NAME, read_manifest, sha256_of, write_manifest, write_shard
+from keyin.data.hdf5 import (
+    MANIFEST_NAME,
+    read_manifest,
+    remove_stale_temporaries,
+    sha256_of,
+    write_manifest,
+    write_shard,
+)
 from keyin.errors import DatasetFormatError
 
 # Splits draw from disjoint seed ranges: clip i of split s uses seed + SPLIT_OFFSETS[s] + i.
@@ -114,10 +121,12 @@ def generate_dataset(
     """Generate (or finish generating) a dataset folder.
 
     Returns:
-        Statistics: clips written, shards skipped, seconds, clips/s, rejection rate.
+        Statistics: clips written, shards skipped, partial shards of a killed run removed, seconds,
+        clips/s, rejection rate.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    stale = remove_stale_temporaries(folder)  # partial shards of a killed run
     meta = {"generator": type(generator).__name__, "config": dict(config or asdict(generator))}
     done = finished_shards(folder, meta["config"])
     jobs = plan_shards(splits, shard_size)
@@ -167,6 +176,7 @@ def generate_dataset(
     return {
         "clips": clips,
         "shards_skipped": len(jobs) - len(todo),
+        "stale_temporaries_removed": len(stale),
         "seconds": seconds,
         "clips_per_s": clips / seconds if clips else 0.0,
         "rejection_rate": 1 - clips / attempts if attempts else 0.0,

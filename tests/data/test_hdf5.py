@@ -1,4 +1,6 @@
+import errno
 import json
+import os
 
 import h5py
 import numpy as np
@@ -8,9 +10,12 @@ from keyin.data.brownian import BrownianGenerator
 from keyin.data.clips import ShardClips
 from keyin.data.generate import generate_dataset
 from keyin.data.hdf5 import (
+    TEMPORARY_TAG,
     check_compatible,
     inspect_shard,
     load_arrays,
+    remove_stale_temporaries,
+    sha256_of,
     split_files,
     write_shard,
 )
@@ -124,3 +129,32 @@ def test_shard_clips_returns_future_keyframes_and_lengths(tmp_path):
     raw = load_arrays(split_files(tmp_path, "test")[0])
     np.testing.assert_array_equal(item["keyframes"].numpy(), raw["keyframes"][2, 5:])
     assert int(item["future_length"]) == 30
+
+
+def test_a_failed_write_keeps_the_old_file_names_the_path_and_leaves_no_temporary(tmp_path, monkeypatch):
+    path = tmp_path / "a.h5"
+    checksum = write_shard(path, arrays(), ATTRS)
+
+    def disk_full(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", disk_full)
+    with pytest.raises(OSError) as failure:
+        write_shard(path, arrays(n=5), ATTRS)
+    assert failure.value.errno == errno.ENOSPC and failure.value.filename == str(path)
+    assert [p.name for p in tmp_path.iterdir()] == ["a.h5"] and sha256_of(path) == checksum
+
+
+def test_stale_temporaries_of_dead_writers_are_removed_live_ones_kept(tmp_path):
+    dead = tmp_path / f".a.h5{TEMPORARY_TAG}99999999"  # no process has this id
+    live = tmp_path / f".b.h5{TEMPORARY_TAG}{os.getpid()}"
+    for path in (dead, live, tmp_path / "c.h5"):
+        path.write_bytes(b"partial")
+    assert remove_stale_temporaries(tmp_path) == [dead]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "c.h5"])
+
+
+def test_a_file_without_clips_is_refused(tmp_path):
+    write_shard(tmp_path / "empty.h5", arrays(n=0), ATTRS)
+    with pytest.raises(DatasetFormatError, match="no clips in .*empty.h5; pass a file with clips"):
+        ShardClips([tmp_path / "empty.h5"], (8, 8, 1), 2, 4)
