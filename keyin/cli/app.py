@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+import contextlib
+import difflib
+import errno
 import functools
 import json
+import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterator, Mapping
 
+import hydra
 from hydra.core.hydra_config import HydraConfig
-from hydra.errors import InstantiationException
+from hydra.errors import ConfigCompositionException, InstantiationException, OverrideParseException
 from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
@@ -29,8 +35,31 @@ def fail(message: str) -> None:
     sys.exit(2)
 
 
+# The fix named when the file system refuses a file (errno → fix).
+WRITABLE_FOLDER = "choose a writable folder with hydra.run.dir= (the run dir) or data_dir= (datasets)"
+FILE_SYSTEM_FIXES = {
+    errno.ENOSPC: "free disk space (or point data_dir= / hydra.run.dir= at another disk) and run the "
+    "same command again: finished shards and checkpoints are kept",
+    errno.EDQUOT: "free space within your quota and run the same command again",
+    errno.EROFS: WRITABLE_FOLDER,
+    errno.EACCES: f"{WRITABLE_FOLDER}, or fix the permissions",
+    errno.EPERM: WRITABLE_FOLDER,
+    errno.ENOTDIR: "a part of the path is a file, not a folder: " + WRITABLE_FOLDER,
+}
+
+
+def fail_if_refused(err: OSError) -> None:
+    """Exit with one error line if the file system refused a file (disk full, read-only, no
+    permission); return for any other ``OSError``."""
+    fix = FILE_SYSTEM_FIXES.get(err.errno)
+    if fix is not None:
+        where = f" ({err.filename})" if err.filename else ""
+        fail(f"{os.strerror(err.errno)}{where}; {fix}")
+
+
 def user_errors(task: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
-    """Turn a ``KeyinError`` (or a bad value caught while instantiating) into one error line."""
+    """Turn a ``KeyinError``, a bad value caught while instantiating or a refused write into one
+    error line."""
 
     @functools.wraps(task)
     def wrapper(cfg: DictConfig) -> Any:
@@ -43,8 +72,74 @@ def user_errors(task: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any
             if isinstance(cause, (ValueError, KeyinError)):
                 fail(str(cause))
             raise
+        except OSError as err:
+            fail_if_refused(err)
+            raise
 
     return wrapper
+
+
+def unknown_key_message(err: ConfigAttributeError | ConfigKeyError, hint: str) -> str:
+    """``a.b.typo=1``: name the key, the closest existing one (or all of them) and ``+key=``."""
+    parent = err.full_key.rpartition(".")[0]
+    keys = [str(k) for k in (err.parent_node or {}) if k != "hydra"]
+    close = difflib.get_close_matches(str(err.key), keys, n=1)
+    prefix = f"{parent}." if parent else ""
+    known = f"did you mean {prefix}{close[0]}?" if close else f"known keys: {', '.join(keys)}"
+    return f"unknown config key {err.full_key} ({known}); {hint[0].lower()}{hint[1:]}"
+
+
+def hydra_message(err: Exception) -> str:
+    """Hydra's multi-line message of a bad option, key or override as one line."""
+    cause = err.__cause__
+    lines = str(err).partition("Config search path:")[0].splitlines()
+    if isinstance(cause, (ConfigAttributeError, ConfigKeyError)) and cause.full_key and len(lines) > 1:
+        return unknown_key_message(cause, lines[1])
+    parts: list[str] = []
+    for line in lines:
+        if line.startswith("\t") and parts:  # an option listed under "Available options in ...:"
+            parts[-1] += (" " if parts[-1].endswith(":") else ", ") + line.strip()
+        elif line.strip():
+            parts.append(line.strip().rstrip("."))
+    return "; ".join(parts)
+
+
+@contextlib.contextmanager
+def hydra_raises() -> Iterator[None]:
+    """Let Hydra raise its errors (``HYDRA_FULL_ERROR=1``) instead of printing them and exiting 1."""
+    previous = os.environ.get("HYDRA_FULL_ERROR")
+    os.environ["HYDRA_FULL_ERROR"] = "1"
+    try:
+        yield
+    finally:
+        if previous is None:
+            os.environ.pop("HYDRA_FULL_ERROR", None)
+        else:
+            os.environ["HYDRA_FULL_ERROR"] = previous
+
+
+def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Callable[[], None]]:
+    """``hydra.main`` on ``conf/<config_name>.yaml``, where a bad config group option, an unknown
+    key, an unparsable override or a run dir that cannot be created gives one ``error:`` line and
+    exit status 2, like the checks of the task itself."""
+
+    def decorate(task: Callable[[DictConfig], Any]) -> Callable[[], None]:
+        hydra_main = hydra.main(config_path=CONFIG_DIR, config_name=config_name, version_base="1.3")(task)
+
+        @functools.wraps(task)
+        def main() -> None:
+            with hydra_raises():
+                try:
+                    hydra_main()
+                except (ConfigCompositionException, OverrideParseException) as err:
+                    fail(hydra_message(err))
+                except OSError as err:  # Hydra creating the run dir or its log file
+                    fail_if_refused(err)
+                    raise
+
+        return main
+
+    return decorate
 
 
 def run_dir() -> Path:

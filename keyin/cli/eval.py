@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import hydra
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import CONFIG_DIR, run_dir, user_errors, write_metrics
+from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
@@ -61,7 +60,7 @@ def evaluate(cfg: DictConfig) -> dict:
     return metrics
 
 
-@hydra.main(config_path=CONFIG_DIR, config_name="eval", version_base="1.3")
+@keyin_main("eval")
 def main(cfg: DictConfig) -> None:
     evaluate(cfg)
 

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import hydra
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import CONFIG_DIR, run_dir, user_errors, write_metrics
+from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
 from keyin.data.generate import generate_dataset
 
@@ -36,7 +35,7 @@ def generate(cfg: DictConfig) -> dict:
     return stats
 
 
-@hydra.main(config_path=CONFIG_DIR, config_name="generate", version_base="1.3")
+@keyin_main("generate")
 def main(cfg: DictConfig) -> None:
     generate(cfg)
 

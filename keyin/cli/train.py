@@ -9,12 +9,11 @@ import json
 from pathlib import Path
 from typing import Callable
 
-import hydra
 import lightning as L
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import CONFIG_DIR, config_choice, run_dir, user_errors, write_metrics
+from keyin.cli.app import config_choice, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.eval.discovery import score_methods
@@ -93,7 +92,7 @@ def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: 
     return metrics
 
 
-@hydra.main(config_path=CONFIG_DIR, config_name="train", version_base="1.3")
+@keyin_main("train")
 def main(cfg: DictConfig) -> None:
     train(cfg)
 

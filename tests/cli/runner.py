@@ -53,3 +53,11 @@ def run(module: str, *overrides: str, cwd: Path) -> Result:
 def last_json(stdout: str) -> dict:
     """The JSON object every entry point prints as its last line."""
     return json.loads(stdout.strip().splitlines()[-1])
+
+
+def error_line(result: Result) -> str:
+    """The one ``error:`` line of a command that stopped on bad input (exit status 2, no traceback)."""
+    lines = [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr[-2000:]
+    return lines[0]

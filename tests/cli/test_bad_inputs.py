@@ -1,0 +1,144 @@
+"""Bad inputs: one ``error:`` line naming the problem and the fix, exit status 2, nothing half-written.
+
+The table of outcomes is docs/reliability.md; each row names its test here (by its id).
+"""
+
+import json
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+import torch
+
+from keyin.data import hdf5
+from keyin.data.brownian import BrownianGenerator
+from keyin.data.generate import generate_dataset
+from tests.cli.runner import error_line, last_json, run
+from tests.faults import fill_disk_on, make_read_only
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A good Brownian test split and broken variants of its shard and of a checkpoint."""
+    root = tmp_path_factory.mktemp("files")
+    generate_dataset(BrownianGenerator(), root / "good" / "brownian", "brownian", {"test": 4}, 4, 0, progress=False)
+    shard = root / "good" / "brownian" / "test-00000.h5"
+    raw = shard.read_bytes()
+    (root / "truncated.h5").write_bytes(raw[: len(raw) // 3])
+    shutil.copytree(root / "good", root / "corrupt")
+    flipped = bytearray(raw)
+    flipped[-100] ^= 0xFF
+    (root / "corrupt" / "brownian" / "test-00000.h5").write_bytes(bytes(flipped))
+    shutil.copy(shard, root / "version99.h5")
+    with h5py.File(root / "version99.h5", "a") as handle:
+        handle.attrs["format_version"] = 99
+    with h5py.File(root / "foreign.h5", "w") as handle:
+        handle["frames"] = np.zeros((2, 35, 32, 32, 1), np.uint8)
+    empty = {"frames": np.zeros((0, 35, 32, 32, 1), np.uint8), "length": np.zeros(0, np.int32)}
+    hdf5.write_shard(root / "empty.h5", empty, {"generator": "x", "config": {}, "seed": 0, "split": "test", "n_cond": 5})
+    (root / "garbage.ckpt").write_bytes(b"not a checkpoint")
+    torch.save({"state_dict": {}}, root / "plain.ckpt")
+    (root / "no_dataset").mkdir()
+    return root
+
+
+# id, command, overrides ({files} is the fixture's folder), the problem named, the fix named.
+BAD_INPUTS = [
+    ("unknown-option", "eval", ["model=random", "dataset=nope"],
+     "Could not find 'dataset/nope'", "Available options in 'dataset': brownian, pushing"),
+    ("key-typo", "eval", ["model=random", "dataset.n_futur=3"],
+     "unknown config key dataset.n_futur", "did you mean dataset.n_future?"),
+    ("key-typo-top-level", "train", ["seeed=3"], "unknown config key seeed", "did you mean seed?"),
+    ("override-syntax", "eval", ["model=random", "dataset.n_future=="],
+     "Error parsing override 'dataset.n_future=='", "override_grammar"),
+    ("S>N", "eval", ["model=random", "dataset.max_offset=40"],
+     "dataset.max_offset=40 (S) must be <= dataset.n_future=30 (N)", "can never be supervised"),
+    ("M*S<N", "eval", ["model=random", "dataset.max_offset=4"],
+     "dataset.n_keyframes * dataset.max_offset = 6*4 = 24 (M*S) must be >= dataset.n_future=30", "can never be covered"),
+    ("negative-size", "eval", ["model=random", "dataset.n_keyframes=-2"],
+     "dataset.n_keyframes=-2", "must be a positive integer"),
+    ("zero-size", "eval", ["model=random", "dataset.image_size=0"], "dataset.image_size=0", "must be a positive integer"),
+    ("zero-batch", "train", ["scale=smoke", "scale.batch_size=0"], "scale.batch_size=0", "must be a positive integer"),
+    ("zero-split", "generate", ["splits={test: 0}"], "splits.test=0", "must be a positive integer"),
+    ("negative-seed", "eval", ["model=random", "seed=-1"], "seed=-1", "must be an integer in [0, 2**32)"),
+    ("float-seed", "generate", ["seed=1.5"], "seed=1.5", "must be an integer in [0, 2**32)"),
+    ("text-seed", "train", ["seed=abc"], "seed='abc'", "must be an integer in [0, 2**32)"),
+    ("unknown-stage", "train", ["stage=nope"], "stage='nope'", "allowed: both, interpolator, keyframes"),
+    ("nothing-to-evaluate", "eval", ["dataset=brownian"], "choose what to evaluate", "model=random|constant or ckpt="),
+    ("missing-file", "eval", ["model=random", "data={files}/nope.h5"], "nope.h5 does not exist", "keyin-generate"),
+    ("truncated-file", "eval", ["model=random", "data={files}/truncated.h5"],
+     "truncated.h5 is not a readable HDF5 file", "truncated or corrupt: regenerate it"),
+    ("corrupt-shard", "eval", ["model=random", "data_dir={files}/corrupt"],
+     "does not match its checksum in the manifest", "delete it and re-run `keyin-generate`"),
+    ("format-version", "eval", ["model=random", "data={files}/version99.h5"],
+     "has format_version 99, this keyin reads 1", "regenerate the file"),
+    ("foreign-hdf5", "eval", ["model=random", "data={files}/foreign.h5"],
+     "lacks the attributes", "write it with keyin.data.hdf5.write_shard"),
+    ("missing-manifest", "eval", ["model=random", "data_dir={files}/no_dataset"],
+     "no manifest.json in", "generate the dataset with `keyin-generate`"),
+    ("missing-split", "eval", ["model=random", "split=val", "data_dir={files}/good"],
+     "has no 'val' split (it has ['test'])", "generate it with `keyin-generate`"),
+    ("wrong-image-size", "eval", ["model=random", "dataset=pushing", "data={files}/good/brownian/test-00000.h5"],
+     "image (H, W, C) (32, 32, 1) != config (64, 64, 3)", "pick the matching dataset= option"),
+    ("wrong-channels", "eval", ["model=random", "dataset.channels=3", "data={files}/good/brownian/test-00000.h5"],
+     "image (H, W, C) (32, 32, 1) != config (32, 32, 3)", "pick the matching dataset= option"),
+    ("empty-file", "eval", ["model=random", "data={files}/empty.h5"], "no clips in", "generate some with `keyin-generate`"),
+    ("empty-train-split", "train", ["scale=smoke", "dataset.splits.train=2"],
+     "the train split has 2 clips, fewer than one batch of 4", "lower scale.batch_size"),
+    ("missing-checkpoint", "eval", ["ckpt={files}/nope.ckpt"], "nope.ckpt does not exist", "pass the path of a keyin checkpoint"),
+    ("corrupt-checkpoint", "eval", ["ckpt={files}/garbage.ckpt"],
+     "garbage.ckpt is not a loadable keyin checkpoint", "it may be corrupt"),
+    ("foreign-checkpoint", "eval", ["ckpt={files}/plain.ckpt"], "plain.ckpt is not a keyin checkpoint", "no 'keyin_stage' entry"),
+    ("data-dir-is-a-file", "generate", ["data_dir={files}/garbage.ckpt"],
+     "Not a directory", "choose a writable folder with hydra.run.dir= (the run dir) or data_dir="),
+]
+
+
+def half_written(root):
+    """Files a failed command must not leave: temporaries of atomic writes, results."""
+    return sorted(p for p in root.rglob("*") if hdf5.TEMPORARY_TAG in p.name or p.name == "metrics.json")
+
+
+QUIET = {"eval": "progress=false", "generate": "progress=false", "train": "logger=none"}
+
+
+@pytest.mark.parametrize("command,overrides,problem,fix",
+                         [pytest.param(*case[1:], id=case[0]) for case in BAD_INPUTS])
+def test_bad_input_gives_one_error_line(files, tmp_path, command, overrides, problem, fix):
+    overrides = [o.replace("{files}", str(files)) for o in overrides]
+    line = error_line(run(command, *overrides, QUIET[command], cwd=tmp_path))
+    assert problem in line and fix in line
+    assert half_written(tmp_path) == [] and not (tmp_path / "data").exists()
+
+
+def test_a_read_only_run_dir(tmp_path, monkeypatch):
+    make_read_only(monkeypatch, tmp_path / "ro")
+    line = error_line(run("eval", "model=random", f"hydra.run.dir={tmp_path}/ro/run", cwd=tmp_path))
+    assert f"Read-only file system ({tmp_path}/ro/run)" in line
+    assert "choose a writable folder with hydra.run.dir=" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_read_only_data_dir(tmp_path, monkeypatch):
+    make_read_only(monkeypatch, tmp_path / "ro")
+    line = error_line(run("generate", "splits={test: 3}", "progress=false", f"data_dir={tmp_path}/ro", cwd=tmp_path))
+    assert f"Read-only file system ({tmp_path}/ro" in line and "data_dir= (datasets)" in line
+    assert half_written(tmp_path) == [] and not (tmp_path / "ro").exists()
+
+
+def test_a_full_disk_while_generating_keeps_the_finished_shards_and_resumes(tmp_path, monkeypatch):
+    command = ("generate", "splits={test: 9}", "shard_size=3", "progress=false", "data_dir=data")
+    fill_disk_on(monkeypatch, hdf5, lambda path: path.name == "test-00001.h5")
+    line = error_line(run(*command, cwd=tmp_path))
+    folder = tmp_path / "data" / "brownian"
+    assert "No space left on device (data/brownian/test-00001.h5)" in line
+    assert "free disk space" in line and "run the same command again" in line
+    assert sorted(p.name for p in folder.iterdir()) == ["manifest.json", "test-00000.h5"]
+    assert [e["file"] for e in json.loads((folder / "manifest.json").read_text())["splits"]["test"]] == ["test-00000.h5"]
+    assert half_written(tmp_path) == []
+
+    monkeypatch.undo()  # space freed: the same command finishes the job
+    result = run(*command, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert last_json(result.stdout)["shards_skipped"] == 1 and len(hdf5.split_files(folder, "test")) == 3
