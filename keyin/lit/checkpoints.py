@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import lightning as L
 import torch
+from lightning.pytorch.plugins.io import TorchCheckpointIO
 
+from keyin.data.hdf5 import atomic_write_bytes
 from keyin.errors import CheckpointError
 
 CONFIG_KEY = "keyin_config"
@@ -55,6 +58,46 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
             )
         )
     return checkpoint
+
+
+class AtomicCheckpointIO(TorchCheckpointIO):
+    """Writes each checkpoint next to its destination and renames it into place, so a crash or a
+    full disk leaves the previous ``last.ckpt`` whole (Lightning's default may stage the file in
+    $TMPDIR and copy it across file systems)."""
+
+    def save_checkpoint(self, checkpoint: dict[str, Any], path: Any, storage_options: Any = None) -> None:
+        if storage_options is not None:
+            raise TypeError(f"{type(self).__name__} takes no storage_options")
+        buffer = io.BytesIO()
+        torch.save(checkpoint, buffer)
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(Path(path), buffer.getvalue())
+
+
+def parameter_shapes(state_dict: Mapping[str, Any]) -> dict[str, tuple[int, ...]]:
+    """Name → shape of every tensor of a state dict."""
+    return {name: tuple(value.shape) for name, value in state_dict.items()}
+
+
+def check_same_model(
+    checkpoint: dict[str, Any], path: Path, module: L.LightningModule, config: Mapping[str, Any]
+) -> None:
+    """Refuse to resume a checkpoint of another model: another ``model=`` (stage 1 excepted, which
+    KEYIN, Jumpy and Static share) or other parameter shapes (other sizes in ``scale=``/``dataset=``)."""
+    saved_model = (checkpoint.get(CONFIG_KEY) or {}).get("model", {}).get("name")
+    model = config.get("model", {}).get("name")
+    if module.stage != "interpolator" and saved_model not in (None, model):
+        raise CheckpointError(
+            f"{path} holds a model={saved_model} checkpoint but this run trains model={model}; "
+            f"resume it with model={saved_model}, or train model={model} in a new run dir"
+        )
+    if parameter_shapes(checkpoint["state_dict"]) != parameter_shapes(module.state_dict()):
+        saved, now = checkpoint.get("hyper_parameters", {}), dict(module.hparams)
+        changed = [f"{k}={saved[k]!r} (now {now[k]!r})" for k in saved if k in now and saved[k] != now[k]]
+        raise CheckpointError(
+            f"{path} holds a model of other sizes ({', '.join(changed) or 'other parameter shapes'}); "
+            f"resume with the overrides it was trained with, or start a new run dir"
+        )
 
 
 def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tuple[L.LightningModule, dict[str, Any]]:

@@ -9,8 +9,9 @@ from typing import Any, Mapping
 import lightning as L
 from lightning.pytorch.callbacks import ModelCheckpoint
 
+from keyin.data.hdf5 import remove_stale_temporaries
 from keyin.errors import KeyinError
-from keyin.lit.checkpoints import RunConfigInCheckpoint, load_checkpoint
+from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
 
 
@@ -56,10 +57,12 @@ def fit_stage(
         logger=logger,
         callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures")],
         default_root_dir=str(run_dir),
+        plugins=[AtomicCheckpointIO()],
     )
+    remove_stale_temporaries(folder)  # a checkpoint being written when the last run was killed
     resume = last if last.is_file() else None
-    if resume is not None:
-        load_checkpoint(resume, module.stage)  # one clear error for a foreign, corrupt or unsafe file
+    if resume is not None:  # one clear error for a foreign, corrupt, unsafe or other model's file
+        check_same_model(load_checkpoint(resume, module.stage), resume, module, config)
     # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
     trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
     trainer.save_checkpoint(last)  # the final state, whatever the checkpoint cadence

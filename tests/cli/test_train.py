@@ -1,12 +1,16 @@
 """keyin-train end to end at scale=smoke: both stages, checkpoints, resume, eval of the checkpoint."""
 
 import json
+import shutil
 
 import pytest
 import torch
 
+from keyin.lit import checkpoints
 from keyin.lit.checkpoints import CONFIG_KEY, load_checkpoint
-from tests.cli.runner import last_json, run
+from keyin.lit.interpolator import InterpolatorModule
+from tests.cli.runner import error_line, last_json, run
+from tests.faults import fill_disk_on
 
 
 @pytest.fixture(scope="module")
@@ -92,3 +96,53 @@ def test_a_resumed_run_keeps_the_csv_metrics_of_the_first_process(tmp_path):
     assert len(files) == 2
     steps = [[int(line.split(",")[1]) for line in f.read_text().splitlines()[1:]] for f in files]
     assert max(steps[0]) < 3 <= max(steps[1])
+
+
+STAGE1 = ("scale=smoke", "stage=interpolator", "logger=none", "num_workers=0",
+          "trainer.enable_progress_bar=false", "hydra.run.dir=run")
+
+
+def stage1_checkpoint(root):
+    return root / "run" / "checkpoints" / "interpolator" / "last.ckpt"
+
+
+def test_resuming_a_run_dir_with_other_model_sizes_is_refused(tmp_path):
+    assert run("train", *STAGE1, cwd=tmp_path).returncode == 0
+    before = stage1_checkpoint(tmp_path).read_bytes()
+    line = error_line(run("train", *STAGE1, "scale.embed_dim=32", cwd=tmp_path))
+    assert "holds a model of other sizes (embed_dim=16 (now 32))" in line
+    assert "resume with the overrides it was trained with, or start a new run dir" in line
+    assert stage1_checkpoint(tmp_path).read_bytes() == before
+
+
+def test_resuming_stage2_as_another_model_is_refused(trained, tmp_path):
+    root, _ = trained
+    shutil.copytree(root / "run" / "checkpoints", tmp_path / "run" / "checkpoints")
+    line = error_line(run("train", "scale=smoke", "model=jumpy", "logger=none", "resume=run", cwd=tmp_path))
+    assert "holds a model=keyin checkpoint but this run trains model=jumpy" in line
+    assert "resume it with model=keyin, or train model=jumpy in a new run dir" in line
+
+
+def test_a_non_finite_loss_stops_with_one_error_and_keeps_the_last_good_checkpoint(tmp_path, monkeypatch):
+    original = InterpolatorModule.training_step
+
+    def poisoned(self, batch, batch_idx):  # NaN from the third step on
+        loss = original(self, batch, batch_idx)
+        return loss * float("nan") if self.global_step >= 2 else loss
+
+    monkeypatch.setattr(InterpolatorModule, "training_step", poisoned)
+    line = error_line(run("train", *STAGE1, "scale.stage1_steps=6", cwd=tmp_path))
+    assert "non-finite loss nan at step" in line and "lower the learning rate and resume" in line
+    checkpoint = load_checkpoint(stage1_checkpoint(tmp_path))
+    assert checkpoint["global_step"] == 2
+    assert all(torch.isfinite(value).all() for value in checkpoint["state_dict"].values())
+
+
+def test_a_full_disk_at_a_checkpoint_keeps_the_previous_one(tmp_path, monkeypatch):
+    writes = []
+    fill_disk_on(monkeypatch, checkpoints, lambda path: writes.append(path) or len(writes) == 2)
+    line = error_line(run("train", *STAGE1, "scale.stage1_steps=6", cwd=tmp_path))
+    assert f"No space left on device ({stage1_checkpoint(tmp_path)})" in line
+    assert "free disk space" in line and "run the same command again" in line
+    assert load_checkpoint(stage1_checkpoint(tmp_path))["global_step"] == 2
+    assert [p.name for p in stage1_checkpoint(tmp_path).parent.iterdir()] == ["last.ckpt"]
