@@ -39,7 +39,7 @@ def test_out_of_range_action_is_clipped(env):
     env.reset(seed=1)
     unit, *_ = env.step(np.array([1.0, -1.0], dtype=np.float32))
     assert np.array_equal(big["pusher"], unit["pusher"])
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=r"pushing actions are 2 finite numbers in \[-1, 1\], got"):
         env.step(np.array([np.inf, 0.0]))
 
 

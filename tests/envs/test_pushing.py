@@ -87,7 +87,7 @@ def test_out_of_range_actions_are_clipped_and_nan_raises():
         a, b = clipped.step(np.array([7.0, -3.0])), reference.step(np.array([1.0, -1.0]))
         assert np.array_equal(a.observation["pusher"], b.observation["pusher"])
     assert np.allclose(clipped.physics.pusher_velocity(), [1.0, -1.0], atol=0.05)  # v_max = 1
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=r"pushing actions are 2 finite numbers in \[-1, 1\], got"):
         clipped.step(np.array([np.nan, 0.0]))
 
 
