@@ -13,6 +13,8 @@ discover the ground truth, before stage 2 is trained (PROTOTYPE-FINDINGS §4).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import torch
 import torch.nn.functional as F
 from torch import Tensor
@@ -35,13 +37,16 @@ def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tens
     return start[inside], offset[inside]
 
 
-def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[list[int]]]:
+def best_segmentation(costs: Tensor, n_keyframes: int, keyframe_cost: float = 0.0) -> tuple[Tensor, list[list[int]]]:
     """Minimum-cost segmentation of ``0 … N`` into at most M gaps of at most S (exact DP).
 
     Args:
         costs: (B, N, S) cost of the segment from extended index ``a`` with offset ``o = s + 1``;
             ``inf`` where ``a + o > N``.
         n_keyframes: M, the most segments (keyframes) allowed.
+        keyframe_cost: a price per segment (per keyframe, the closing one included). At 0 the
+            optimum of an interpolation cost uses every gap it may, since a shorter segment is
+            always a little easier; a price keeps only the keyframes that pay for themselves.
     Returns:
         total (B,) the minimum summed cost, and per clip the keyframe *positions* (future frame
         indices ``k - 1``) of the interior boundaries, the final boundary at ``N - 1`` excluded.
@@ -51,6 +56,7 @@ def best_segmentation(costs: Tensor, n_keyframes: int) -> tuple[Tensor, list[lis
     batch, n_future, max_offset = costs.shape
     if n_keyframes * max_offset < n_future:
         raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
+    costs = costs.cpu() + keyframe_cost
     # best[m, b, k]: cheapest cover of 0…k by exactly m gaps; back[m, b, k]: the gap's offset.
     best = torch.full((n_keyframes + 1, batch, n_future + 1), float("inf"), dtype=costs.dtype)
     back = torch.zeros((n_keyframes + 1, batch, n_future + 1), dtype=torch.long)
@@ -114,9 +120,9 @@ def interpolation_costs(
         (B, N, S) costs, ``inf`` where the segment leaves the clip.
     """
     batch, n_ext, _ = boundary_emb.shape
-    n_future, max_offset = n_ext - 1, interpolator.max_offset
-    costs = torch.full((batch, n_future, max_offset), float("inf"))
-    clip, start, offset = _all_segments(batch, n_future, max_offset)
+    n_future, max_offset, device = n_ext - 1, interpolator.max_offset, boundary_emb.device
+    costs = torch.full((batch, n_future, max_offset), float("inf"), device=device)
+    clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset))
     for first in range(0, len(clip), chunk):
         c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
         predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
@@ -124,7 +130,7 @@ def interpolation_costs(
         logits = decoder(predicted[valid]).flatten(1)  # (V, D)
         targets = frames[c[:, None].expand_as(positions)[valid], positions[valid]]
         bce = F.binary_cross_entropy_with_logits(logits, targets, reduction="none").sum(1)
-        costs[c, a, o - 1] = torch.zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
+        costs[c, a, o - 1] = bce.new_zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
     return costs
 
 
@@ -177,25 +183,82 @@ def boundary_segment_costs(scores: Tensor, max_offset: int) -> Tensor:
 def boundary_keyframes(scores: Tensor, lengths: Tensor, n_keyframes: int, max_offset: int) -> list[list[int]]:
     """The most likely keyframe positions under per-frame boundary scores, at most M gaps of at most S.
 
-    Clips of different valid lengths are decoded separately, each closing at its own last frame.
-
     Args:
         scores: (B, N) boundary logits; lengths: (B,) valid future frames.
     Returns:
         Per clip, the interior keyframe positions (the clip's last frame is never one).
     """
-    positions: list[list[int]] = [[] for _ in range(len(scores))]
+    return decode_by_length(
+        lambda rows, length: boundary_segment_costs(scores[rows, :length].detach().float(), max_offset),
+        lengths, n_keyframes, max_offset,
+    )
+
+
+def decode_by_length(
+    segment_costs: Callable[[Tensor, int], Tensor],
+    lengths: Tensor,
+    n_keyframes: int,
+    max_offset: int,
+    keyframe_cost: float = 0.0,
+) -> list[list[int]]:
+    """Best segmentation of clips of different valid lengths, each closing at its own last frame.
+
+    Args:
+        segment_costs: ``(rows, length) -> (R, length, S)`` costs of the clips ``rows`` (all of
+            valid length ``length``), cut to that length.
+        lengths: (B,) valid future frames.
+        keyframe_cost: see :func:`best_segmentation`.
+    Returns:
+        Per clip, the interior keyframe positions.
+    """
+    positions: list[list[int]] = [[] for _ in range(len(lengths))]
     for length in lengths.unique().tolist():
-        rows = (lengths == length).nonzero().flatten()
         if length < 1:
             continue
         if n_keyframes * max_offset < length:
             raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover a clip of {length} frames")
-        costs = boundary_segment_costs(scores[rows, :length].detach().float().cpu(), min(max_offset, length))
-        _, decoded = best_segmentation(costs, n_keyframes)
+        rows = (lengths == length).nonzero().flatten()
+        _, decoded = best_segmentation(segment_costs(rows, length), n_keyframes, keyframe_cost)
         for row, clip_positions in zip(rows.tolist(), decoded):
             positions[row] = clip_positions
     return positions
+
+
+@torch.no_grad()
+def map_keyframes(
+    interpolator: torch.nn.Module,
+    decoder: torch.nn.Module,
+    boundary_emb: Tensor,
+    frames: Tensor,
+    lengths: Tensor,
+    n_keyframes: int,
+    keyframe_cost: float,
+    scores: Tensor | None = None,
+    boundary_weight: float = 0.0,
+) -> list[list[int]]:
+    """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
+    optionally, the keyframe predictor's boundary scores as a prior.
+
+    Minimises ``Σ_segments BCE + keyframe_cost · (#keyframes) − boundary_weight · Σ_keyframes s``
+    exactly (our discovery rule "map", docs/decisions.md).
+
+    Args:
+        boundary_emb: (B, N + 1, E) embeddings on the extended index; frames: (B, N, D) in [0, 1].
+        lengths: (B,) valid future frames.
+        scores: (B, N) boundary logits, or None for the interpolation cost alone.
+    Returns:
+        Per clip, the interior keyframe positions.
+    """
+    max_offset = interpolator.max_offset
+
+    def segment_costs(rows: Tensor, length: int) -> Tensor:
+        rows = rows.to(boundary_emb.device)
+        costs = interpolation_costs(interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length])
+        if scores is not None and boundary_weight:
+            costs = costs + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset)
+        return costs.cpu()
+
+    return decode_by_length(segment_costs, lengths.cpu(), n_keyframes, max_offset, keyframe_cost)
 
 
 def _gaps(row: list[int], n_future: int) -> list[tuple[int, int]]:

@@ -16,13 +16,19 @@ import torch
 import torch.nn.functional as F
 
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.eval.segmentation import best_segmentation, boundary_keyframes, embedding_costs, segmentation_offsets
+from keyin.eval.segmentation import (
+    best_segmentation,
+    boundary_keyframes,
+    embedding_costs,
+    map_keyframes,
+    segmentation_offsets,
+)
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_frames, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
 FROZEN = ("encoder", "decoder", "interpolator")
-DISCOVERY_RULES = ("offsets", "boundaries")
+DISCOVERY_RULES = ("offsets", "boundaries", "map")
 
 
 class KeyframeModule(L.LightningModule):
@@ -49,6 +55,9 @@ class KeyframeModule(L.LightningModule):
         teacher_clips: int = 0,
         offset_evidence: bool = False,
         discovery: str = "offsets",
+        teacher_keyframe_cost: float = 0.0,
+        map_keyframe_cost: float = 120.0,
+        map_boundary_weight: float = 10.0,
     ) -> None:
         super().__init__()
         if discovery not in DISCOVERY_RULES:
@@ -182,7 +191,7 @@ class KeyframeModule(L.LightningModule):
         n_clips = self.hparams.teacher_clips or out["boundary_emb"].shape[0]
         boundary_emb = out["boundary_emb"][:n_clips].detach()
         costs = embedding_costs(self.interpolator, boundary_emb).cpu()
-        _, positions = best_segmentation(costs, self.hparams.n_keyframes)
+        _, positions = best_segmentation(costs, self.hparams.n_keyframes, self.hparams.teacher_keyframe_cost)
         n_future = boundary_emb.shape[1] - 1
         full = future_length[:n_clips].cpu() == n_future
         targets = segmentation_offsets(positions, n_future, self.hparams.n_keyframes)
@@ -213,10 +222,12 @@ class KeyframeModule(L.LightningModule):
         """Keyframe positions in posterior mode with the posterior mean, inside each clip.
 
         Args:
-            discovery: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9) or
+            discovery: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9),
                 "boundaries" (with ``offset_evidence``: the most likely keyframe set under
-                LSTM_inf's per-frame boundary scores, within M gaps of at most S); default: the
-                module's ``discovery``.
+                LSTM_inf's per-frame boundary scores, within M gaps of at most S) or "map" (the
+                exact best segmentation under the frozen interpolator's pixel BCE with
+                ``map_keyframe_cost`` per keyframe, plus ``map_boundary_weight`` times the
+                boundary scores where there are any); default: the module's ``discovery``.
         """
         discovery = discovery or self.hparams.discovery
         was_training = self.training
@@ -232,6 +243,12 @@ class KeyframeModule(L.LightningModule):
         if discovery == "boundaries":
             return boundary_keyframes(
                 keys.boundary_scores, future_length.cpu(), self.hparams.n_keyframes, self.predictor.max_offset
+            )
+        if discovery == "map":
+            return map_keyframes(
+                self.interpolator, self.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2).to(self.device),
+                future_length, self.hparams.n_keyframes, self.hparams.map_keyframe_cost,
+                keys.boundary_scores, self.hparams.map_boundary_weight,
             )
         positions = argmax_positions(keys.offset_probs).cpu()
         return [

@@ -7,6 +7,7 @@ from keyin.eval.segmentation import (
     best_segmentation,
     boundary_keyframes,
     interpolation_costs,
+    map_keyframes,
     path_cost,
     segment_starts_offsets,
     segmentation_offsets,
@@ -15,8 +16,8 @@ from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
 
 
-def brute_force(costs: torch.Tensor, n_keyframes: int) -> tuple[float, list[int]]:
-    """Enumerate every composition of N into at most M parts of at most S."""
+def brute_force(costs: torch.Tensor, n_keyframes: int, keyframe_cost: float = 0.0) -> tuple[float, list[int]]:
+    """Enumerate every composition of N into at most M parts of at most S, each part priced."""
     n_future, max_offset = costs.shape
     best = (float("inf"), [])
     for m in range(1, n_keyframes + 1):
@@ -24,7 +25,7 @@ def brute_force(costs: torch.Tensor, n_keyframes: int) -> tuple[float, list[int]
             if sum(gaps) != n_future:
                 continue
             boundaries = [0, *itertools.accumulate(gaps)]
-            total = sum(float(costs[a, g - 1]) for a, g in zip(boundaries[:-1], gaps))
+            total = sum(float(costs[a, g - 1]) + keyframe_cost for a, g in zip(boundaries[:-1], gaps))
             if total < best[0]:
                 best = (total, [k - 1 for k in boundaries[1:-1]])
     return best
@@ -44,6 +45,25 @@ def test_dp_matches_enumeration():
         assert total[b].item() == pytest.approx(expected_total)
         assert positions[b] == expected_positions
     assert torch.allclose(path_cost(costs, positions), total)
+
+
+def test_keyframe_cost_prices_every_segment():
+    torch.manual_seed(1)
+    n_future, max_offset, n_keyframes = 9, 5, 5
+    costs = torch.rand(4, n_future, max_offset) * torch.arange(1, max_offset + 1) ** 2  # long gaps cost more
+    start, offset = segment_starts_offsets(n_future, max_offset)
+    outside = torch.ones(n_future, max_offset, dtype=torch.bool)
+    outside[start, offset - 1] = False
+    costs[:, outside] = float("inf")
+    counts = []
+    for keyframe_cost in (0.0, 3.0, 100.0):
+        total, positions = best_segmentation(costs, n_keyframes, keyframe_cost)
+        for b in range(4):
+            expected_total, expected_positions = brute_force(costs[b], n_keyframes, keyframe_cost)
+            assert total[b].item() == pytest.approx(expected_total)
+            assert positions[b] == expected_positions
+        counts.append(sum(map(len, positions)))
+    assert counts[0] > counts[-1] == 4  # a high price leaves the fewest gaps that cover 9 (two each)
 
 
 def test_dp_recovers_planted_boundaries():
@@ -127,3 +147,40 @@ def test_boundary_keyframes_close_each_clip_at_its_own_length():
     scores[:, [2, 7]] = 5.0
     decoded = boundary_keyframes(scores, torch.tensor([10, 5]), n_keyframes=4, max_offset=5)
     assert decoded == [[2, 7], [2]]  # position 7 is padding in the second clip
+
+
+def test_map_keyframes_minimise_bce_plus_price_minus_boundary_scores():
+    torch.manual_seed(2)
+    n_future, max_offset, n_keyframes, embed_dim = 7, 4, 4, 8
+    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
+    boundary_emb = torch.rand(3, n_future + 1, embed_dim)
+    frames = (torch.rand(3, n_future, 64) > 0.5).float()
+    scores = torch.randn(3, n_future) * 20
+    price, weight = 30.0, 2.0
+    decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, torch.full((3,), n_future),
+                            n_keyframes, price, scores, weight)
+    bce = interpolation_costs(interpolator, decoder, boundary_emb, frames)
+    for b in range(3):
+        expected_total, expected = float("inf"), None
+        for size in range(n_keyframes):
+            for chosen in itertools.combinations(range(n_future - 1), size):
+                edges = [0, *(p + 1 for p in chosen), n_future]
+                gaps = list(zip(edges[:-1], edges[1:]))
+                if max(right - left for left, right in gaps) > max_offset:
+                    continue
+                total = sum(float(bce[b, left, right - left - 1]) + price for left, right in gaps)
+                total -= weight * sum(float(scores[b, p]) for p in chosen)
+                if total < expected_total:
+                    expected_total, expected = total, list(chosen)
+        assert decoded[b] == expected
+
+
+def test_map_keyframes_close_each_clip_at_its_own_length():
+    torch.manual_seed(4)
+    interpolator = Interpolator(8, 4, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, 8, norm="none").eval()
+    boundary_emb, frames = torch.rand(2, 9, 8), (torch.rand(2, 8, 64) > 0.5).float()
+    decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, torch.tensor([8, 5]), 4, 1.0)
+    alone = map_keyframes(interpolator, decoder, boundary_emb[1:, :6], frames[1:, :5], torch.tensor([5]), 4, 1.0)
+    assert decoded[1] == alone[0] and all(p < 4 for p in decoded[1])

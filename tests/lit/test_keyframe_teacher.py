@@ -65,12 +65,14 @@ def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored(
     with torch.no_grad():
         module.predictor.boundary_head.bias.fill_(-5.0)  # no boundary anywhere but where the
         module.predictor.boundary_head.weight.zero_()  # per-frame scores are forced below
-    assert list(module.discoverers("keyin")) == ["keyin", "keyin_offsets"]
+    assert list(module.discoverers("keyin")) == ["keyin", "keyin_offsets", "keyin_map"]
     data = batch()
     found = module.discover(data["frames"], data["future_length"])
     assert found == [[2], [2], [2]]  # gaps ≤ S = 3 over 6 (or 4) frames force one interior keyframe
     offsets = module.discoverers("keyin")["keyin_offsets"](data["frames"], data["future_length"])
     assert all(all(0 <= p < n for p in row) for row, n in zip(offsets, [6, 6, 4]))
+    mapped = module.discover(data["frames"], data["future_length"], discovery="map")
+    assert all(all(0 <= p < n - 1 for p in row) for row, n in zip(mapped, [6, 6, 4]))
     assert list(keyframe_module(0.0).discoverers("jumpy")) == ["jumpy"]
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(0.0, discovery="boundaries")
