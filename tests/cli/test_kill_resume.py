@@ -1,0 +1,100 @@
+"""kill -9 mid-run, then the same command again: nothing finished is redone, nothing partial is left.
+
+The first run is a real process (``tests/cli/held.py``) held at a chosen point, e.g. with a shard
+written under its temporary name but not yet renamed, and killed there with SIGKILL.
+"""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pytest
+import torch
+
+from keyin.data.brownian import BrownianGenerator
+from keyin.data.generate import generate_dataset
+from keyin.data.hdf5 import TEMPORARY_TAG, load_arrays, split_files
+from keyin.lit.checkpoints import load_checkpoint
+from tests.cli.runner import last_json, run
+
+REPO = Path(__file__).resolve().parents[2]
+GENERATE = ("generate", "splits={test: 9}", "shard_size=3", "progress=false", "data_dir=data")
+TRAIN = ("train", "scale=smoke", "stage=interpolator", "scale.stage1_steps=6", "scale.checkpoint_every=2",
+         "logger=none", "num_workers=0", "trainer.enable_progress_bar=false", "hydra.run.dir=run")
+
+
+def kill_when(point: str, command: tuple[str, ...], cwd: Path, ready: Callable[[], bool], timeout: float = 300) -> int:
+    """Run ``command`` held at ``point`` in a new process, SIGKILL it once ``ready()``; its exit code."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    with tempfile.TemporaryFile("w+") as log:
+        child = subprocess.Popen([sys.executable, "-m", "tests.cli.held", point, *command], cwd=cwd, env=env,
+                                 stdout=log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + timeout
+        try:
+            while not ready():
+                if child.poll() is not None:
+                    log.seek(0)
+                    pytest.fail(f"the command ended before the kill point: {log.read()[-2000:]}")
+                assert time.monotonic() < deadline, "the kill point was never reached"
+                time.sleep(0.01)
+        finally:
+            child.send_signal(signal.SIGKILL)
+            child.wait()
+    return child.returncode
+
+
+def test_generate_killed_while_writing_a_shard_resumes_without_redoing_finished_ones(tmp_path):
+    folder = tmp_path / "data" / "brownian"
+    partial = lambda: list(folder.glob(f".test-00001.h5{TEMPORARY_TAG}*"))  # noqa: E731
+    assert kill_when("rename:test-00001.h5", GENERATE, tmp_path, lambda: bool(partial())) == -9
+    assert sorted(p.name for p in folder.iterdir() if not p.name.startswith(".")) == ["manifest.json", "test-00000.h5"]
+    assert len(partial()) == 1
+    finished = (folder / "test-00000.h5").stat().st_mtime_ns
+
+    result = run(*GENERATE, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    stats = last_json(result.stdout)
+    assert (stats["shards_skipped"], stats["clips"], stats["stale_temporaries_removed"]) == (1, 6, 1)
+    assert (folder / "test-00000.h5").stat().st_mtime_ns == finished
+    assert sorted(p.name for p in folder.iterdir()) == ["manifest.json"] + [f"test-0000{i}.h5" for i in range(3)]
+    generate_dataset(BrownianGenerator(), tmp_path / "clean", "brownian", {"test": 9}, 3, 0, progress=False)
+    for resumed, clean in zip(split_files(folder, "test"), split_files(tmp_path / "clean", "test")):
+        np.testing.assert_array_equal(load_arrays(resumed)["frames"], load_arrays(clean)["frames"])
+
+
+def adam_steps(checkpoint: dict) -> set[float]:
+    return {float(state["step"]) for state in checkpoint["optimizer_states"][0]["state"].values()}
+
+
+@pytest.mark.slow  # about 30 s: the killed process imports torch and Lightning itself
+def test_train_killed_after_a_checkpoint_resumes_its_step_count_and_optimizer_state(tmp_path):
+    last = tmp_path / "run" / "checkpoints" / "interpolator" / "last.ckpt"
+    assert kill_when("checkpoint", TRAIN, tmp_path, last.is_file) == -9
+    killed = load_checkpoint(last)
+    assert killed["global_step"] == 2 and adam_steps(killed) == {2.0}
+
+    # Resumed to the step it was killed at (no further step), the state saved again is the same.
+    shutil.copytree(tmp_path / "run", tmp_path / "copy")
+    same = run(*TRAIN[:-1], "scale.stage1_steps=2", "hydra.run.dir=copy", cwd=tmp_path)
+    assert same.returncode == 0, same.stderr
+    restored = load_checkpoint(tmp_path / "copy" / "checkpoints" / "interpolator" / "last.ckpt")
+    assert restored["global_step"] == 2
+    for name, value in killed["state_dict"].items():
+        torch.testing.assert_close(restored["state_dict"][name], value, rtol=0, atol=0)
+    for key, state in killed["optimizer_states"][0]["state"].items():
+        for name, value in state.items():
+            torch.testing.assert_close(restored["optimizer_states"][0]["state"][key][name], value, rtol=0, atol=0)
+
+    # The same command again finishes the run: 4 more steps, Adam's step count continued, not reset.
+    result = run(*TRAIN, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    finished = load_checkpoint(last)
+    assert finished["global_step"] == 6 and adam_steps(finished) == {6.0}
+    assert sorted(p.name for p in last.parent.iterdir()) == ["last.ckpt"]
