@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import os
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
@@ -22,6 +24,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 
 from keyin.data.hdf5 import (
     MANIFEST_NAME,
+    inspect_shard,
     read_manifest,
     remove_stale_temporaries,
     sha256_of,
@@ -84,6 +87,18 @@ def write_shard_job(
     return job, checksum, attempts
 
 
+def exit_with_parent(parent: int) -> None:
+    """Worker initializer: end the worker within a second of its parent's death (e.g. kill -9),
+    instead of waiting forever on a queue no one writes to."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
 def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[str, dict]]:
     """Manifest entries whose shard file is present and matches its checksum.
 
@@ -107,6 +122,23 @@ def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[s
     return done
 
 
+def unrecorded_shard(folder: Path, job: ShardJob, seed: int, meta: Mapping[str, Any]) -> dict | None:
+    """The manifest entry of a shard that a killed run finished but had not recorded yet, if the
+    file is exactly the one ``job`` would write (a shard gets its name only once complete)."""
+    path = folder / job.file
+    if not path.is_file():
+        return None
+    try:
+        info = inspect_shard(path)
+    except DatasetFormatError:
+        return None
+    config = json.loads(json.dumps(dict(meta["config"])))
+    expected = (job.count, job.split, job.start, split_seed(seed, job.split), meta["generator"], config)
+    if (info.n, info.split, info.first_index, info.seed, info.generator, info.config) != expected:
+        return None
+    return {"file": job.file, "n": job.count, "sha256": sha256_of(path)}
+
+
 def generate_dataset(
     generator: ClipGenerator,
     folder: Path,
@@ -121,8 +153,9 @@ def generate_dataset(
     """Generate (or finish generating) a dataset folder.
 
     Returns:
-        Statistics: clips written, shards skipped, partial shards of a killed run removed, seconds,
-        clips/s, rejection rate.
+        Statistics: clips written, shards skipped (of them, recovered: finished by a killed run but
+        not yet in its manifest), partial shards of a killed run removed, seconds, clips/s,
+        rejection rate.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -130,6 +163,12 @@ def generate_dataset(
     meta = {"generator": type(generator).__name__, "config": dict(config or asdict(generator))}
     done = finished_shards(folder, meta["config"])
     jobs = plan_shards(splits, shard_size)
+    recovered = 0
+    for job in jobs:  # finished by a killed run after its last manifest write
+        entry = None if job.file in done.get(job.split, {}) else unrecorded_shard(folder, job, seed, meta)
+        if entry is not None:
+            done.setdefault(job.split, {})[job.file] = entry
+            recovered += 1
     todo = [job for job in jobs if job.file not in done.get(job.split, {})]
     entries = {split: dict(done.get(split, {})) for split in splits}
     start_time, clips, attempts = time.perf_counter(), 0, 0
@@ -165,7 +204,10 @@ def generate_dataset(
         else:
             # spawn: a forked worker of a parent that has rendered with EGL can hang.
             context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=context) as pool:
+            pool = ProcessPoolExecutor(
+                workers, mp_context=context, initializer=exit_with_parent, initargs=(os.getpid(),)
+            )
+            with pool:
                 futures = [
                     pool.submit(write_shard_job, generator, job, folder, seed, meta) for job in todo
                 ]
@@ -176,6 +218,7 @@ def generate_dataset(
     return {
         "clips": clips,
         "shards_skipped": len(jobs) - len(todo),
+        "shards_recovered": recovered,
         "stale_temporaries_removed": len(stale),
         "seconds": seconds,
         "clips_per_s": clips / seconds if clips else 0.0,

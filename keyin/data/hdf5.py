@@ -148,6 +148,8 @@ class ShardInfo:
     split: str
     generator: str
     config: dict
+    seed: int = 0  # the split's base seed: clip i was made from seed + i
+    first_index: int | None = None  # the index of the shard's first clip in its split
 
 
 def inspect_shard(path: Path) -> ShardInfo:
@@ -212,6 +214,8 @@ def inspect_shard(path: Path) -> ShardInfo:
             split=str(handle.attrs["split"]),
             generator=str(handle.attrs["generator"]),
             config=config,
+            seed=int(handle.attrs["seed"]),
+            first_index=int(handle.attrs["first_index"]) if "first_index" in handle.attrs else None,
         )
 
 

@@ -30,15 +30,15 @@ TRAIN = ("train", "scale=smoke", "stage=interpolator", "scale.stage1_steps=6", "
          "logger=none", "num_workers=0", "trainer.enable_progress_bar=false", "hydra.run.dir=run")
 
 
-def kill_when(point: str, command: tuple[str, ...], cwd: Path, ready: Callable[[], bool], timeout: float = 300) -> int:
-    """Run ``command`` held at ``point`` in a new process, SIGKILL it once ``ready()``; its exit code."""
+def kill_when(point: str, command: tuple[str, ...], cwd: Path, ready: Callable[[int], bool], timeout: float = 300) -> int:
+    """Run ``command`` held at ``point`` in a new process, SIGKILL it once ``ready(its pid)``; its exit code."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     with tempfile.TemporaryFile("w+") as log:
         child = subprocess.Popen([sys.executable, "-m", "tests.cli.held", point, *command], cwd=cwd, env=env,
                                  stdout=log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + timeout
         try:
-            while not ready():
+            while not ready(child.pid):
                 if child.poll() is not None:
                     log.seek(0)
                     pytest.fail(f"the command ended before the kill point: {log.read()[-2000:]}")
@@ -50,23 +50,70 @@ def kill_when(point: str, command: tuple[str, ...], cwd: Path, ready: Callable[[
     return child.returncode
 
 
-def test_generate_killed_while_writing_a_shard_resumes_without_redoing_finished_ones(tmp_path):
+@pytest.mark.parametrize("point,partial,recovered", [
+    pytest.param("rename:test-00001.h5", ".test-00001.h5", 0, id="mid-shard"),
+    pytest.param("rename:manifest.json", ".manifest.json", 1, id="shard-done-manifest-not"),
+])
+def test_generate_killed_mid_run_redoes_no_finished_shard_and_leaves_no_partial_file(tmp_path, point, partial, recovered):
     folder = tmp_path / "data" / "brownian"
-    partial = lambda: list(folder.glob(f".test-00001.h5{TEMPORARY_TAG}*"))  # noqa: E731
-    assert kill_when("rename:test-00001.h5", GENERATE, tmp_path, lambda: bool(partial())) == -9
-    assert sorted(p.name for p in folder.iterdir() if not p.name.startswith(".")) == ["manifest.json", "test-00000.h5"]
-    assert len(partial()) == 1
+    partials = lambda: list(folder.glob(f"{partial}{TEMPORARY_TAG}*"))  # noqa: E731
+    assert kill_when(point, GENERATE, tmp_path, lambda pid: bool(partials())) == -9
+    assert len(partials()) == 1 and (folder / "test-00000.h5").is_file()
     finished = (folder / "test-00000.h5").stat().st_mtime_ns
 
     result = run(*GENERATE, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     stats = last_json(result.stdout)
-    assert (stats["shards_skipped"], stats["clips"], stats["stale_temporaries_removed"]) == (1, 6, 1)
+    assert (stats["shards_skipped"], stats["shards_recovered"], stats["clips"]) == (1, recovered, 6)
+    assert stats["stale_temporaries_removed"] == 1
     assert (folder / "test-00000.h5").stat().st_mtime_ns == finished
     assert sorted(p.name for p in folder.iterdir()) == ["manifest.json"] + [f"test-0000{i}.h5" for i in range(3)]
     generate_dataset(BrownianGenerator(), tmp_path / "clean", "brownian", {"test": 9}, 3, 0, progress=False)
-    for resumed, clean in zip(split_files(folder, "test"), split_files(tmp_path / "clean", "test")):
+    for resumed, clean in zip(split_files(folder, "test"), split_files(tmp_path / "clean", "test"), strict=True):
         np.testing.assert_array_equal(load_arrays(resumed)["frames"], load_arrays(clean)["frames"])
+
+
+def children_of(pid: int) -> set[int]:
+    """The ids of a process's children (Linux /proc)."""
+    children = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rpartition(")")[2].split()
+        except OSError:  # the process ended meanwhile
+            continue
+        if int(fields[1]) == pid:
+            children.add(int(stat.parent.name))
+    return children
+
+
+def alive(pid: int) -> bool:
+    stat = Path(f"/proc/{pid}/stat")
+    try:
+        return stat.read_text().rpartition(")")[2].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads processes from Linux /proc")
+def test_generate_workers_end_soon_after_their_parent_is_killed(tmp_path):
+    folder, workers = tmp_path / "data" / "brownian", set()
+
+    def first_shard_done(pid: int) -> bool:
+        if not (folder / "test-00000.h5").is_file():
+            return False
+        workers.update(children_of(pid))  # the pool's workers (and its resource tracker)
+        return True
+
+    command = ("generate", "splits={test: 3000}", "shard_size=100", "workers=2", "progress=false", "data_dir=data")
+    assert kill_when("none", command, tmp_path, first_shard_done) == -9
+    assert len(workers) >= 2
+    deadline = time.monotonic() + 15
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    orphans = [pid for pid in workers if alive(pid)]
+    for pid in orphans:  # do not leave them behind when the test fails
+        os.kill(pid, signal.SIGKILL)
+    assert not orphans, "orphaned workers kept running"
 
 
 def adam_steps(checkpoint: dict) -> set[float]:
@@ -76,7 +123,7 @@ def adam_steps(checkpoint: dict) -> set[float]:
 @pytest.mark.slow  # about 30 s: the killed process imports torch and Lightning itself
 def test_train_killed_after_a_checkpoint_resumes_its_step_count_and_optimizer_state(tmp_path):
     last = tmp_path / "run" / "checkpoints" / "interpolator" / "last.ckpt"
-    assert kill_when("checkpoint", TRAIN, tmp_path, last.is_file) == -9
+    assert kill_when("checkpoint", TRAIN, tmp_path, lambda pid: last.is_file()) == -9
     killed = load_checkpoint(last)
     assert killed["global_step"] == 2 and adam_steps(killed) == {2.0}
 
