@@ -48,13 +48,14 @@ FILE_SYSTEM_FIXES = {
 }
 
 
-def fail_if_refused(err: OSError) -> None:
+def fail_if_refused(err: BaseException) -> None:
     """Exit with one error line if the file system refused a file (disk full, read-only, no
-    permission); return for any other ``OSError``."""
-    fix = FILE_SYSTEM_FIXES.get(err.errno)
+    permission), be it ``err`` or the ``OSError`` that caused it; return for anything else."""
+    refusal = err if isinstance(err, OSError) else err.__cause__
+    fix = FILE_SYSTEM_FIXES.get(refusal.errno) if isinstance(refusal, OSError) else None
     if fix is not None:
-        where = f" ({err.filename})" if err.filename else ""
-        fail(f"{os.strerror(err.errno)}{where}; {fix}")
+        where = f" ({refusal.filename})" if refusal.filename else ""
+        fail(f"{os.strerror(refusal.errno)}{where}; {fix}")
 
 
 def user_errors(task: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
@@ -133,7 +134,7 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
                     hydra_main()
                 except (ConfigCompositionException, OverrideParseException) as err:
                     fail(hydra_message(err))
-                except OSError as err:  # Hydra creating the run dir or its log file
+                except (OSError, ValueError) as err:  # Hydra creating the run dir or its log file
                     fail_if_refused(err)
                     raise
 

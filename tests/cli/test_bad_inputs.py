@@ -3,6 +3,7 @@
 The table of outcomes is docs/reliability.md; each row names its test here (by its id).
 """
 
+import errno
 import json
 import shutil
 
@@ -11,11 +12,12 @@ import numpy as np
 import pytest
 import torch
 
+from keyin.cli.app import fail_if_refused
 from keyin.data import hdf5
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.generate import generate_dataset
 from tests.cli.runner import error_line, last_json, run
-from tests.faults import fill_disk_on, make_read_only
+from tests.faults import fill_disk_on, make_read_only, refuse
 
 
 @pytest.fixture(scope="module")
@@ -142,3 +144,17 @@ def test_a_full_disk_while_generating_keeps_the_finished_shards_and_resumes(tmp_
     result = run(*command, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert last_json(result.stdout)["shards_skipped"] == 1 and len(hdf5.split_files(folder, "test")) == 3
+
+
+def test_a_log_file_hydra_cannot_open_in_a_read_only_run_dir(capsys):
+    # Hydra wraps the OSError of its log file in "ValueError: Unable to configure handler 'file'".
+    try:
+        raise ValueError("Unable to configure handler 'file'") from refuse(errno.EROFS, "run/train.log")
+    except ValueError as err:
+        with pytest.raises(SystemExit) as exit_:
+            fail_if_refused(err)
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == (
+        "error: Read-only file system (run/train.log); choose a writable folder with hydra.run.dir= "
+        "(the run dir) or data_dir= (datasets)\n")
+    fail_if_refused(ValueError("a bug, not the file system"))  # returns: the caller re-raises it
