@@ -15,6 +15,7 @@ from keyin.errors import CheckpointError
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
+PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
 
 
 class RunConfigInCheckpoint(L.Callback):
@@ -44,10 +45,11 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     except Exception as err:  # unpickling refuses anything but tensors and primitives
         raise CheckpointError(
             f"{path} is not a loadable keyin checkpoint ({type(err).__name__}: "
-            f"{str(err).splitlines()[0][:200]}); it may be corrupt or carry code, which keyin refuses"
+            f"{str(err).splitlines()[0][:200]}); it may be corrupt or carry code, which keyin refuses: "
+            f"{PASS_A_CHECKPOINT}"
         ) from None
     if not isinstance(checkpoint, dict) or STAGE_KEY not in checkpoint:
-        raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry)")
+        raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry); {PASS_A_CHECKPOINT}")
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"

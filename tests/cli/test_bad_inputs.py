@@ -90,8 +90,9 @@ BAD_INPUTS = [
      "the train split has 2 clips, fewer than one batch of 4", "lower scale.batch_size"),
     ("missing-checkpoint", "eval", ["ckpt={files}/nope.ckpt"], "nope.ckpt does not exist", "pass the path of a keyin checkpoint"),
     ("corrupt-checkpoint", "eval", ["ckpt={files}/garbage.ckpt"],
-     "garbage.ckpt is not a loadable keyin checkpoint", "it may be corrupt"),
-    ("foreign-checkpoint", "eval", ["ckpt={files}/plain.ckpt"], "plain.ckpt is not a keyin checkpoint", "no 'keyin_stage' entry"),
+     "garbage.ckpt is not a loadable keyin checkpoint", "pass one that keyin-train wrote"),
+    ("foreign-checkpoint", "eval", ["ckpt={files}/plain.ckpt"],
+     "plain.ckpt is not a keyin checkpoint (no 'keyin_stage' entry)", "pass one that keyin-train wrote"),
     ("data-dir-is-a-file", "generate", ["data_dir={files}/garbage.ckpt"],
      "Not a directory", "choose a writable folder with hydra.run.dir= (the run dir) or data_dir="),
 ]
