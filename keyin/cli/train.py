@@ -16,11 +16,23 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli.app import config_choice, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.data.datamodule import ClipDataModule, split_clips
+from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.run import fit_stage
 
 Discoverers = dict[str, Callable]
+
+
+def stage1_checkpoint(cfg: DictConfig, stage1_folder: Path) -> Path:
+    """The stage-1 checkpoint that stage 2 starts from; one clear error if there is none."""
+    path = Path(cfg.interpolator_ckpt or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt")
+    if not path.is_file():
+        raise CheckpointError(
+            f"stage 2 starts from a stage-1 checkpoint and {path} does not exist; train stage 1 first "
+            f"(stage=both or stage=interpolator) or pass interpolator_ckpt=<run dir>/checkpoints/interpolator/last.ckpt"
+        )
+    return path
 
 
 def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder: Path) -> Discoverers:
@@ -36,9 +48,7 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
         )
     if cfg.stage == "interpolator":
         return {}
-    stage1 = load_checkpoint(
-        cfg.interpolator_ckpt or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt", "interpolator"
-    )
+    stage1 = load_checkpoint(stage1_checkpoint(cfg, stage1_folder), "interpolator")
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)

@@ -69,6 +69,7 @@ def test_stage2_without_a_stage1_checkpoint_names_the_fix(tmp_path):
     result = run("train", "scale=smoke", "stage=keyframes", "logger=none", cwd=tmp_path)
     assert result.returncode == 2
     assert "does not exist" in result.stderr and "Traceback" not in result.stderr
+    assert "train stage 1 first (stage=both or stage=interpolator) or pass interpolator_ckpt=" in result.stderr
 
 
 def test_a_checkpoint_of_the_wrong_stage_is_refused(trained, tmp_path):
