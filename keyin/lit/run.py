@@ -15,16 +15,22 @@ from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, che
 from keyin.lit.pictures import ValidationPictures
 
 
+LEARNING_RATES = {"interpolator": "scale.lr_stage1", "keyframes": "scale.lr_stage2", "surprise": "scale.lr_surprise"}
+
+
 class FiniteLoss(L.Callback):
-    """Stop at the first non-finite loss; the last checkpoint on disk stays the last good one."""
+    """Stop at the first non-finite loss, before a checkpoint of that step is written: the last
+    checkpoint on disk stays the last good one."""
 
     def on_train_batch_end(self, trainer: L.Trainer, module, outputs, batch, batch_idx: int) -> None:
         loss = outputs["loss"] if isinstance(outputs, Mapping) else outputs
         if not math.isfinite(float(loss)):
+            last = Path(trainer.default_root_dir) / "checkpoints" / module.stage / "last.ckpt"
+            kept = f"the last good checkpoint is {last}" if last.is_file() else "no checkpoint was saved before it"
             raise KeyinError(
-                f"non-finite loss {float(loss)} at step {trainer.global_step}, batch {batch_idx}; "
-                f"the last good checkpoint is in {trainer.default_root_dir}/checkpoints/"
-                f"{module.stage}/ — lower the learning rate and resume"
+                f"non-finite loss {float(loss)} at step {trainer.global_step}, batch {batch_idx}; {kept}; "
+                f"lower the learning rate ({LEARNING_RATES.get(module.stage, 'lr')}=...) and run the same "
+                f"command again"
             )
 
 

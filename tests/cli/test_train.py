@@ -133,7 +133,9 @@ def test_a_non_finite_loss_stops_with_one_error_and_keeps_the_last_good_checkpoi
 
     monkeypatch.setattr(InterpolatorModule, "training_step", poisoned)
     line = error_line(run("train", *STAGE1, "scale.stage1_steps=6", cwd=tmp_path))
-    assert "non-finite loss nan at step" in line and "lower the learning rate and resume" in line
+    assert "non-finite loss nan at step 3" in line
+    assert f"the last good checkpoint is {stage1_checkpoint(tmp_path)}" in line
+    assert "lower the learning rate (scale.lr_stage1=...) and run the same command again" in line
     checkpoint = load_checkpoint(stage1_checkpoint(tmp_path))
     assert checkpoint["global_step"] == 2
     assert all(torch.isfinite(value).all() for value in checkpoint["state_dict"].values())
