@@ -256,7 +256,7 @@ def map_keyframes(
         costs = interpolation_costs(interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length])
         if scores is not None and boundary_weight:
             costs = costs + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset)
-        return costs.cpu()
+        return costs  # best_segmentation moves it to the CPU
 
     return decode_by_length(segment_costs, lengths.cpu(), n_keyframes, max_offset, keyframe_cost)
 
