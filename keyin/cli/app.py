@@ -18,6 +18,7 @@ from hydra.errors import ConfigCompositionException, InstantiationException, Ove
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
+import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolvers)
 from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
 

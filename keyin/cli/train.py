@@ -10,11 +10,13 @@ from pathlib import Path
 from typing import Callable
 
 import lightning as L
+from lightning.pytorch.loggers import Logger
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import config_choice, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
+from keyin.cli.tracking import job_logger
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
@@ -59,7 +61,7 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
 def train(cfg: DictConfig) -> dict | None:
     check_common(cfg)
     check_training(cfg)
-    folder, scale, dataset = run_dir(), cfg.scale, cfg.dataset
+    folder = run_dir()
     finished = folder / "metrics.json"
     if cfg.skip_finished and finished.is_file():
         metrics = json.loads(finished.read_text())
@@ -67,6 +69,13 @@ def train(cfg: DictConfig) -> dict | None:
         print(json.dumps(metrics, sort_keys=True))
         return metrics
     L.seed_everything(cfg.seed, workers=True)
+    with job_logger(cfg.logger) as logger:
+        return fit_and_score(cfg, folder, logger)
+
+
+def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict | None:
+    """Train the configured model into ``folder`` (logging to ``logger``) and score it on the test split."""
+    scale, dataset = cfg.scale, cfg.dataset
     generator = instantiate(dataset.generator)
     clips = lambda split, size: split_clips(dataset, generator, split, size, cfg.data_dir)  # noqa: E731
     datamodule = lambda batch_size: ClipDataModule(  # noqa: E731
@@ -77,7 +86,7 @@ def train(cfg: DictConfig) -> dict | None:
         val_every=scale.val_every,
         checkpoint_every=scale.checkpoint_every,
         trainer_kwargs=OmegaConf.to_container(cfg.trainer),
-        logger=instantiate(cfg.logger) if cfg.logger else False,
+        logger=logger,
         config=OmegaConf.to_container(cfg, resolve=True),
     )
     if not cfg.model.trainable:
