@@ -32,6 +32,9 @@ class SurpriseModule(L.LightningModule):
             without it the decoder learns to draw the ball only slowly, and while the predictions
             are blurry the posterior has nothing to add (docs/baselines.md). 0: SVG-FP's loss.
         shift: added to a peak's future index (-1: the frame before the one that reveals the turn).
+        beta_warmup: steps over which the KL weight rises linearly from 0 to ``beta`` (0: none).
+            Starting at ``beta`` the posterior collapses before the predictor can use it
+            (docs/baselines.md); a warm-up lets it carry information first.
     """
 
     stage = "surprise"
@@ -55,6 +58,7 @@ class SurpriseModule(L.LightningModule):
         lr: float,
         shift: int = -1,
         ae_weight: float = 0.0,
+        beta_warmup: int = 0,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -88,16 +92,24 @@ class SurpriseModule(L.LightningModule):
             autoencoding = F.binary_cross_entropy_with_logits(self.decoder(embeddings[valid_all]), frames, reduction="sum")
         return bce * valid, kl * valid, valid, autoencoding
 
+    def kl_weight(self) -> float:
+        """The KL weight at the current step: ``beta``, reached linearly over ``beta_warmup`` steps."""
+        warmup = self.hparams.beta_warmup
+        ramp = min(1.0, self.global_step / warmup) if warmup > 0 else 1.0
+        return self.hparams.beta * ramp
+
     def _log_terms(
         self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor, autoencoding: torch.Tensor
     ) -> torch.Tensor:
-        loss = (bce.sum() + self.hparams.beta * kl.sum() + self.hparams.ae_weight * autoencoding) / bce.shape[0]
+        beta = self.kl_weight() if stage == "train" else self.hparams.beta
+        loss = (bce.sum() + beta * kl.sum() + self.hparams.ae_weight * autoencoding) / bce.shape[0]
         n_steps = valid.sum()
         self.log_dict(
             {
                 f"{stage}/loss": loss,
                 f"{stage}/bce_per_frame": bce.sum() / n_steps,
                 f"{stage}/kl_per_step": kl.sum() / n_steps,  # → 0 is the KL collapse to watch for
+                f"{stage}/kl_weight": beta,
             },
             prog_bar=stage == "train",
         )
