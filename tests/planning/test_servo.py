@@ -1,0 +1,78 @@
+"""The low-level servo: subgoal switching, reaching a nearby subgoal, image targets, config."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from omegaconf import OmegaConf
+
+from keyin.envs.geometry import apply_homography
+from keyin.planning.servo import ServoParams, advance_subgoal, run_servo, subgoal_pixels
+
+# A small, fast budget; the pusher starts right behind the puck.
+FAST = ServoParams(horizon=4, samples=40, elites=5, iterations=2, max_timesteps=8)
+
+
+def pixels(env, world: list[list[float]]) -> np.ndarray:
+    return apply_homography(env.physics.homography(), np.array(world))
+
+
+def test_advance_subgoal_on_reach_timeout_and_never_past_the_goal():
+    far = np.array([9.0, 9.0, 9.0])
+    assert advance_subgoal(0, 3, far, 3.0, 10) == 0
+    assert advance_subgoal(0, 10, far, 3.0, 10) == 1  # timeout: one subgoal on
+    assert advance_subgoal(0, 0, np.array([1.0, 2.0, 9.0]), 3.0, 10) == 2  # past every reached one
+    assert advance_subgoal(1, 0, np.array([9.0, 1.0, 1.0]), 3.0, 10) == 2
+    assert advance_subgoal(2, 50, np.array([0.0, 0.0, 0.0]), 3.0, 10) == 2  # the goal is the last
+
+
+def test_reaches_a_nearby_subgoal_and_switches(env):
+    targets = pixels(env, [[0.0, 0.0], [0.0, 0.15]])
+    result = run_servo(env, targets, FAST, np.random.default_rng(0))
+    switch = int(np.argmax(result.subgoal == 1))
+    assert 0 < switch <= 5  # reached within a few steps, well before the 10-step timeout
+    assert np.all(result.subgoal[:switch] == 0) and np.all(result.subgoal[switch:] == 1)
+    reached = np.linalg.norm(pixels(env, result.puck[switch]) - targets[0])
+    assert reached < FAST.subgoal_threshold_px
+    assert np.linalg.norm(pixels(env, result.puck[switch - 1]) - targets[0]) >= FAST.subgoal_threshold_px
+    assert result.puck.shape == (len(result.subgoal) + 1, 2) and result.actions.shape == (len(result.subgoal), 2)
+    assert np.all(np.abs(result.actions) <= 1.0)
+
+
+def test_stops_at_the_goal_and_measures_the_error(env):
+    goal = env.task.layout.goal
+    targets = pixels(env, [[0.0, -0.15]])
+    params = ServoParams(horizon=4, samples=40, elites=5, iterations=2, max_timesteps=10)
+    result = run_servo(env, targets, params, np.random.default_rng(1))
+    assert result.reached_goal and len(result.subgoal) < params.max_timesteps
+    assert result.final_error == pytest.approx(np.linalg.norm(result.puck[-1] - goal))  # nothing in between
+
+
+def test_switches_on_timeout(env):
+    # The first subgoal is across the table: never reached in 3 steps; the goal is then kept.
+    targets = pixels(env, [[0.8, 0.8], [0.0, -0.25]])
+    params = ServoParams(horizon=3, samples=20, elites=5, iterations=1, max_timesteps=5,
+                         max_steps_per_subgoal=3, goal_threshold_px=0.0)
+    result = run_servo(env, targets, params, np.random.default_rng(2))
+    np.testing.assert_array_equal(result.subgoal, [0, 0, 0, 1, 1])
+    assert not result.reached_goal
+
+
+def test_subgoal_images_invisible_subgoals_and_goal_check(env):
+    image = env.physics.render_top()
+    np.testing.assert_allclose(subgoal_pixels(image[None])[0], env.physics.puck_pixel(), atol=0.3)
+    empty = np.full_like(image, 200)
+    targets = subgoal_pixels(np.stack([empty, image]))
+    assert np.isnan(targets[0]).all()
+    params = ServoParams(horizon=2, samples=10, elites=2, iterations=1, max_timesteps=2, goal_threshold_px=0.0)
+    result = run_servo(env, targets, params, np.random.default_rng(3))
+    np.testing.assert_array_equal(result.subgoal, [1, 1])  # the invisible subgoal is skipped
+    with pytest.raises(ValueError, match="goal"):
+        run_servo(env, targets[::-1], params, np.random.default_rng(3))
+
+
+def test_params_from_the_planner_config():
+    config = OmegaConf.load(Path(__file__).parents[2] / "conf" / "planner" / "keyin.yaml")
+    params = ServoParams.from_config(config)
+    assert params == ServoParams()  # the dataclass defaults are the paper's / the config's numbers
+    assert params.cem_params().low == -1.0 and params.cem_params().samples == 200
