@@ -191,10 +191,11 @@ class InterpolatorModule(L.LightningModule):
         self.log_dict(
             {"val/bce_straight": straight, "val/bce_bent": bent, "val/contrast": bent - straight},
             prog_bar=True,
+            sync_dist=True,  # under DDP: the mean over the ranks' first batches
         )
         for offset, row in table.items():
-            self.log(f"val/bce_straight_o{offset}", row["straight"])
-            self.log(f"val/bce_bent_o{offset}", row["bent"])
+            self.log(f"val/bce_straight_o{offset}", row["straight"], sync_dist=True)
+            self.log(f"val/bce_bent_o{offset}", row["bent"], sync_dist=True)
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
         return torch.optim.Adam(self.parameters(), lr=self.hparams.lr, betas=(0.9, 0.999))

@@ -174,6 +174,7 @@ class KeyframeModule(L.LightningModule):
                 f"{stage}/coverage_end": terms["coverage"][:, -1].mean(),
             },
             prog_bar=stage == "train",
+            sync_dist=stage == "val",  # under DDP: the mean over every rank's clips
         )
         return terms
 
@@ -213,7 +214,7 @@ class KeyframeModule(L.LightningModule):
         self._shared_step(batch, "val")
         for name, find in self.discoverers("").items():
             summary = discovery_summary(find(batch["frames"], batch["future_length"]), batch["keyframes"])
-            self.log_dict({f"val/{key}{name}": value for key, value in summary.items()}, prog_bar=not name)
+            self.log_dict({f"val/{key}{name}": value for key, value in summary.items()}, prog_bar=not name, sync_dist=True)
 
     @torch.no_grad()
     def discover(

@@ -112,6 +112,7 @@ class SurpriseModule(L.LightningModule):
                 f"{stage}/kl_weight": beta,
             },
             prog_bar=stage == "train",
+            sync_dist=stage == "val",  # under DDP: the mean over every rank's clips
         )
         return loss
 
@@ -126,10 +127,11 @@ class SurpriseModule(L.LightningModule):
         reveals = F.pad(batch["keyframes"], (n_cond, 0))[:, :-1].bool()  # (B, L-1): step t+1 after vertex t
         future_kl = kl.masked_fill(~valid, float("nan"))
         future_kl[:, : n_cond - 1] = float("nan")  # the conditioning frames have no labels
-        self.log("val/kl_reveal_ratio", future_kl[reveals].nanmean() / future_kl[~reveals].nanmean().clamp_min(1e-9))
+        ratio = future_kl[reveals].nanmean() / future_kl[~reveals].nanmean().clamp_min(1e-9)
+        self.log("val/kl_reveal_ratio", ratio, sync_dist=True)
         predicted = self.discover(batch["frames"], batch["future_length"])
         summary = discovery_summary(predicted, batch["keyframes"])
-        self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True)
+        self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True, sync_dist=True)
 
     @torch.no_grad()
     def surprise(self, clips: torch.Tensor) -> torch.Tensor:
