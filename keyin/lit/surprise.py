@@ -75,14 +75,17 @@ class SurpriseModule(L.LightningModule):
         steps = torch.arange(clips.shape[1], device=clips.device)
         return steps[None] < self.hparams.n_cond + future_length.to(clips.device)[:, None]
 
-    def _terms(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    def _terms(
+        self, batch: dict[str, torch.Tensor], sample: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
         """Per-step prediction BCE and KL of frames 1 … L-1 (B, L-1), zero on padding, the valid
-        mask (B, L-1), and the summed auto-encoding BCE of the valid frames (scalar)."""
+        mask (B, L-1), and the summed auto-encoding BCE of the valid frames (scalar). ``sample``
+        False predicts from the posterior mean (deterministic: validation)."""
         clips = batch["frames"]
         valid_all = self._valid(clips, batch["future_length"])
         valid = valid_all[:, 1:]
         embeddings = self.encoder(clips)
-        predicted, mu, log_sigma = self.core(embeddings)
+        predicted, mu, log_sigma = self.core(embeddings, sample=sample)
         logits = self.decoder(predicted.flatten(0, 1)).view_as(clips[:, 1:])
         bce = F.binary_cross_entropy_with_logits(logits, clips[:, 1:], reduction="none").flatten(2).sum(-1)
         kl = gaussian_kl(mu[:, 1:], log_sigma[:, 1:])
@@ -120,7 +123,7 @@ class SurpriseModule(L.LightningModule):
         return self._log_terms("train", *self._terms(batch))
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
-        bce, kl, valid, autoencoding = self._terms(batch)
+        bce, kl, valid, autoencoding = self._terms(batch, sample=False)
         self._log_terms("val", bce, kl, valid, autoencoding)
         # Is the KL where the turns are? Mean KL at the frames after a vertex over that elsewhere.
         n_cond = self.hparams.n_cond

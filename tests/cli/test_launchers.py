@@ -1,0 +1,33 @@
+"""Sweeps through Hydra's launcher plugins: joblib (local processes) and submitit's local executor
+(the SLURM code path on this machine). Untrained baselines keep each job to a few seconds."""
+
+import json
+
+import pytest
+
+from tests.cli.runner import run
+
+pytest.importorskip("hydra_plugins.hydra_joblib_launcher")
+pytest.importorskip("hydra_plugins.hydra_submitit_launcher")
+
+
+@pytest.fixture(scope="module")
+def test_set(tmp_path_factory):
+    root = tmp_path_factory.mktemp("launchers")
+    assert run("generate", "splits={test: 6}", "progress=false", cwd=root).returncode == 0
+    return root
+
+
+@pytest.mark.parametrize("launcher", [
+    ("hydra/launcher=joblib", "hydra.launcher.n_jobs=2"),
+    ("hydra/launcher=local",),
+])
+def test_a_sweep_runs_every_job_through_the_launcher(test_set, launcher):
+    sweep = f"sweep_{launcher[0].split('=')[1]}"
+    result = run("train", "-m", "model=random,constant", "seed=0,1", *launcher, f"hydra.sweep.dir={sweep}",
+                 cwd=test_set)
+    assert result.returncode == 0, result.stderr[-3000:]
+    jobs = sorted((test_set / sweep).glob("*/metrics.json"))
+    assert len(jobs) == 4
+    rows = {(m["method"], m["seed"]) for m in (json.loads(path.read_text()) for path in jobs)}
+    assert rows == {(method, seed) for method in ("random", "constant") for seed in (0, 1)}
