@@ -2,11 +2,13 @@
 
 ``PushingGenerator.generate(index, seed)`` runs the rule-based demonstrator of
 :mod:`keyin.envs.demonstrator` without rendering, retrying with derived sub-seeds until a demo is
-accepted, then renders the accepted demo's saved frames (every ``frame_skip``-th raw frame) from the
-recorded physics states. A clip is ``L = n_cond + n_future`` saved frames; the first ``n_cond`` are
-the conditioning frames. Shorter demos are padded by repeating the last frame (zero actions), longer
-ones are truncated and their keyframes beyond the clip dropped. Clip index ``i`` is saved frame
-``i``, so with ``n_cond = 1`` future index ``j`` is clip index ``1 + j``.
+accepted, then renders the accepted demo's saved frames (every ``frame_skip``-th raw frame) with
+``renderer``: ``"analytic"`` (:mod:`keyin.envs.render`, numpy, from the recorded positions; MuJoCo's
+pixels up to rare depth ties, docs/pushing.md) or ``"mujoco"`` (the top camera through OpenGL, from
+the recorded physics states: the reference). A clip is ``L = n_cond + n_future`` saved frames; the
+first ``n_cond`` are the conditioning frames. Shorter demos are padded by repeating the last frame
+(zero actions), longer ones are truncated and their keyframes beyond the clip dropped. Clip index
+``i`` is saved frame ``i``, so with ``n_cond = 1`` future index ``j`` is clip index ``1 + j``.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from keyin.data.hdf5 import write_shard
 
 N_SUBGOAL_SLOTS = 6  # the ``subgoals`` array is (6, 2) whatever n_pushes is (unused rows repeat the goal)
 _ENVS: dict = {}  # one pixel-free environment per generator config and process
+RENDERERS = ("analytic", "mujoco")
 
 
 @dataclass(frozen=True)
@@ -34,6 +37,7 @@ class PushingGenerator:
     n_cond: int = 1
     n_future: int = 30
     max_attempts: int = 100
+    renderer: str = "analytic"  # one of RENDERERS
     # scene (keyin.envs.pushing.SceneParams)
     puck_radius: float = 0.06
     pusher_radius: float = 0.04
@@ -74,6 +78,10 @@ class PushingGenerator:
     frame_skip: int = 2
     min_push_frames: int = 4
     max_push_frames: int = 6
+
+    def __post_init__(self) -> None:
+        if self.renderer not in RENDERERS:
+            raise ValueError(f"renderer must be one of {RENDERERS}, got {self.renderer!r}")
 
     @property
     def clip_length(self) -> int:
@@ -128,7 +136,7 @@ class PushingGenerator:
         )
 
     def render_states(self, states: np.ndarray) -> np.ndarray:
-        """(K, S) physics states -> (K, H, W, 3) uint8 top-camera frames."""
+        """(K, S) physics states -> (K, H, W, 3) uint8 top-camera frames rendered by MuJoCo."""
         physics = self.environment().physics
         frames = np.empty((len(states), self.image_size, self.image_size, 3), np.uint8)
         for k, state in enumerate(states):
@@ -136,6 +144,15 @@ class PushingGenerator:
                 physics.set_state(state)
             frames[k] = physics.render_top()
         return frames
+
+    def render_demo(self, demo: Any, frames: np.ndarray) -> np.ndarray:
+        """(K,) raw frame indices of ``demo`` -> (K, H, W, 3) uint8 top-camera frames by ``renderer``."""
+        if self.renderer == "mujoco":
+            self.environment().physics.set_wall(demo.layout.wall)
+            return self.render_states(demo.states[frames])
+        from keyin.envs.render import render_top
+
+        return render_top(self._parts()[0], demo.layout.wall, demo.puck[frames], demo.pusher[frames])
 
     def generate(self, index: int, seed: int) -> tuple[dict[str, np.ndarray], int]:
         """One clip, deterministic in ``seed + index``.
@@ -154,7 +171,7 @@ class PushingGenerator:
         saved = np.arange(0, len(demo.states), skip)
         valid = min(len(saved), length)
         keep = saved[:valid]
-        frames = self.render_states(demo.states[keep])
+        frames = self.render_demo(demo, keep)
         pad = length - valid
         actions = demo.actions.reshape(-1, skip, 2).mean(axis=1)[: valid - 1]
         completions = demo.saved_completions(skip)
@@ -197,7 +214,7 @@ class PushingGenerator:
         from keyin.envs.layout import Layout
 
         demo, _ = self.demo(index, seed)
-        start_image, goal_image = self.render_states(demo.states[[0, -1]])
+        start_image, goal_image = self.render_demo(demo, np.array([0, -1]))
         goal = demo.puck[-1]
         layout = Layout(demo.layout.wall, demo.layout.start, goal, demo.layout.home)
         return {

@@ -13,7 +13,7 @@ the dataset keeps every second frame.
 Lighting is one ambient-only headlight, so every surface renders as its flat ``rgba`` colour (the
 puck is exactly ``PUCK_RGB``); shadows and multisampling are off (with a shadow-casting light and
 4x MSAA a software-rendered frame took ~450 ms here instead of 2-6 ms). The camera is orthographic, so world -> pixel is affine
-(:meth:`PushingPhysics.homography`).
+(:meth:`PushingPhysics.homography`); :mod:`keyin.envs.render` draws the same images in numpy.
 """
 
 from __future__ import annotations
@@ -36,6 +36,10 @@ SUITE = containers.TaggedTasks()
 DEFAULT_TIME_LIMIT = 12.0  # s: 120 control steps = 60 saved frames = the servo's T_max (REFERENCE §7.2)
 CAMERA = "top"
 REWARD_MARGIN = 1.5  # path length beyond the goal tolerance at which the reward reaches 0
+# Flat RGB colours of the geoms (ambient-only lighting renders them unchanged).
+COLOURS = {"table": (0.85, 0.85, 0.85), "border": (0.3, 0.3, 0.3), "wall": (0.15, 0.35, 0.85),
+           "pusher": (0.95, 0.55, 0.1), "puck": PUCK_RGB}
+BOX_HALF_HEIGHT = 0.05  # border and wall boxes stand on the table: tops at 0.1
 
 
 @dataclass(frozen=True)
@@ -58,18 +62,23 @@ class SceneParams:
     goal_tolerance: float = 0.05
 
 
+def border_boxes(scene: SceneParams) -> list[tuple[float, float, float, float]]:
+    """The four border boxes ``(cx, cy, half_x, half_y)`` round the free table ``[-arena_half,
+    arena_half]²``."""
+    border = 1.0 - scene.arena_half
+    sides = [(s * (1 - border / 2), 0.0, border / 2, 1.0) for s in (-1, 1)]
+    return sides + [(0.0, s * (1 - border / 2), 1.0, border / 2) for s in (-1, 1)]
+
+
 def make_model(scene: SceneParams) -> str:
     """The MJCF of the scene; the wall is resized and placed per episode by ``set_wall``."""
     z = scene.puck_radius  # puck and pusher centres share one height: contact normals stay planar
-    border = 1.0 - scene.arena_half
-    colours = {"table": "0.85 0.85 0.85 1", "border": "0.3 0.3 0.3 1", "wall": "0.15 0.35 0.85 1",
-               "pusher": "0.95 0.55 0.1 1", "puck": " ".join(str(c) for c in PUCK_RGB) + " 1"}
-    sides = [(f"{s * (1 - border / 2)} 0", f"{border / 2} 1") for s in (-1, 1)]
-    sides += [(f"0 {s * (1 - border / 2)}", f"1 {border / 2}") for s in (-1, 1)]
+    h = BOX_HALF_HEIGHT
+    colours = {name: " ".join(str(c) for c in rgb) + " 1" for name, rgb in COLOURS.items()}
     borders = "\n".join(
-        f'    <geom name="border{i}" type="box" pos="{pos} 0.05" size="{size} 0.05" '
+        f'    <geom name="border{i}" type="box" pos="{cx} {cy} {h}" size="{hx} {hy} {h}" '
         f'rgba="{colours["border"]}"/>'
-        for i, (pos, size) in enumerate(sides)
+        for i, (cx, cy, hx, hy) in enumerate(border_boxes(scene))
     )
     servo = (f'gaintype="fixed" gainprm="{scene.pusher_kv * scene.v_max}" biastype="affine" '
              f'biasprm="0 0 {-scene.pusher_kv}" ctrlrange="-1 1" ctrllimited="true"')
@@ -91,8 +100,8 @@ def make_model(scene: SceneParams) -> str:
     <geom name="table" type="plane" size="1 1 0.1" rgba="{colours["table"]}" contype="0" conaffinity="0"/>
 {borders}
     <camera name="{CAMERA}" pos="0 0 1" projection="orthographic" fovy="2"/>
-    <body name="wall" pos="0 0.3 0.05">
-      <geom name="wall" type="box" size="0.4 0.03 0.05" rgba="{colours["wall"]}"/>
+    <body name="wall" pos="0 0.3 {h}">
+      <geom name="wall" type="box" size="0.4 0.03 {h}" rgba="{colours["wall"]}"/>
     </body>
     <body name="pusher" pos="0 0 {z}">
       <joint name="pusher_x" axis="1 0 0"/>

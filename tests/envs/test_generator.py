@@ -64,17 +64,20 @@ def test_deterministic_per_seed_and_index(clips):
 
 
 def _generate(args):
-    index, seed = args
-    arrays, attempts = GENERATOR.generate(index, seed)
+    generator, index, seed = args
+    arrays, attempts = generator.generate(index, seed)
     return arrays["frames"], arrays["puck"], attempts
 
 
 def test_spawn_workers_render_without_hanging(clips):
-    # The parent has rendered (clips fixture); forked children of such a parent can hang in EGL.
-    # (Measured here: with "fork" instead, both workers hang and the timeout fires.)
+    # Forked children of a parent that has rendered through EGL can hang, so the parent renders
+    # with MuJoCo first. (Measured here: with "fork" instead, both workers hang and the timeout
+    # fires.) The workers render with MuJoCo too, the clips fixture analytically: same frames.
+    gl_generator = PushingGenerator(renderer="mujoco")
+    gl_generator.generate(1, 7)
     pool = multiprocessing.get_context("spawn").Pool(2)
     try:
-        results = pool.map_async(_generate, [(0, 7), (2, 7)]).get(timeout=120)
+        results = pool.map_async(_generate, [(gl_generator, 0, 7), (gl_generator, 2, 7)]).get(timeout=120)
     finally:
         pool.terminate()  # a hung worker must not hang the test session too
         pool.join()
