@@ -23,7 +23,6 @@ import argparse
 import datetime
 import os
 import platform
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,18 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from common import cpu_model, publish
+
 from keyin.data.generate import generate_dataset
 from keyin.data.pushing import RENDERERS, PushingGenerator
 from keyin.envs.demonstrator import run_demo
-
-
-def cpu_model() -> str:
-    try:
-        lines = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines()
-    except (OSError, subprocess.CalledProcessError):
-        return platform.processor() or "unknown"
-    names = [line.split(":", 1)[1].strip() for line in lines if line.startswith("Model name")]
-    return names[0] if names else "unknown"
 
 
 REPEATS = 3  # the ceiling rates are the best of this many runs (the machine may be shared)
@@ -155,10 +147,7 @@ def main() -> None:
             "",
         ]
     )
-    print(report)
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(report)
+    publish(report, args.out)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-from generate_pushing import cpu_model
+from common import cpu_model, publish
 
 import keyin.envs
 from keyin.data.generate import split_seed
@@ -173,10 +173,7 @@ def main() -> None:
         f"{start_difference:.3g} at the task's start, {end_difference:.3g} after the last run.",
         "",
     ])
-    print(report)
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(report)
+    publish(report, args.out)
 
 
 if __name__ == "__main__":
