@@ -65,6 +65,21 @@ def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):
     assert checkpoint["global_step"] == 3
 
 
+def test_the_same_seed_trains_the_same_weights_and_metrics_twice(trained):
+    root, metrics = trained
+    result = run("train", "experiment=brownian_keyin", "scale=smoke", "logger=none",
+                 "trainer.enable_progress_bar=false", "hydra.run.dir=again", cwd=root)
+    assert result.returncode == 0, result.stderr
+    again = last_json(result.stdout)
+    assert {k: v for k, v in again.items() if k != "run_dir"} == {k: v for k, v in metrics.items() if k != "run_dir"}
+    for stage in ("interpolator", "keyframes"):
+        first = load_checkpoint(root / "run" / "checkpoints" / stage / "last.ckpt")["state_dict"]
+        second = load_checkpoint(root / "again" / "checkpoints" / stage / "last.ckpt")["state_dict"]
+        assert first.keys() == second.keys()
+        for key in first:
+            torch.testing.assert_close(first[key], second[key], rtol=0, atol=0)
+
+
 def test_stage2_without_a_stage1_checkpoint_names_the_fix(tmp_path):
     result = run("train", "scale=smoke", "stage=keyframes", "logger=none", cwd=tmp_path)
     assert result.returncode == 2
