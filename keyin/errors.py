@@ -15,3 +15,7 @@ class DatasetFormatError(KeyinError):
 
 class CheckpointError(KeyinError):
     """A checkpoint is missing, unsafe to load, or belongs to another model or stage."""
+
+
+class UnsafePathError(KeyinError):
+    """A file name taken from a data or metrics file would leave the folder it must stay in."""

@@ -21,6 +21,7 @@ from keyin.data.datamodule import split_clips
 from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
 from keyin.eval.report import collect_metrics, csv_table, markdown_table, method_sort_key, summarise
+from keyin.paths import inside
 from keyin.viz.report import save_f1_bars, save_method_comparison
 
 
@@ -70,7 +71,7 @@ def report(sweep: Path, out: Path, n_examples: int) -> list[Path]:
             continue
         clips, n_cond = example_clips(job, min(n_examples, len(truth)))
         predicted = {method: per_clip[: len(clips)] for method, per_clip in predicted.items()}
-        written.append(save_method_comparison(clips, n_cond, truth[: len(clips)], predicted, out / f"examples_{dataset}.png"))
+        written.append(save_method_comparison(clips, n_cond, truth[: len(clips)], predicted, inside(out, f"examples_{dataset}.png", "a metrics.json's dataset")))
     print(header + markdown_table(rows))
     return written
 

@@ -32,6 +32,7 @@ from keyin.data.hdf5 import (
     write_shard,
 )
 from keyin.errors import DatasetFormatError
+from keyin.paths import inside
 
 # Splits draw from disjoint seed ranges: clip i of split s uses seed + SPLIT_OFFSETS[s] + i.
 SPLIT_OFFSETS = {"train": 0, "val": 100_000_000, "test": 200_000_000}
@@ -116,7 +117,7 @@ def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[s
     done: dict[str, dict[str, dict]] = {}
     for split, entries in manifest["splits"].items():
         for entry in entries:
-            path = folder / entry["file"]
+            path = inside(folder, entry["file"], str(folder / MANIFEST_NAME))
             if path.is_file() and sha256_of(path) == entry["sha256"]:
                 done.setdefault(split, {})[entry["file"]] = entry
     return done

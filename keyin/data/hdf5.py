@@ -29,6 +29,7 @@ import numpy as np
 
 from keyin import __version__
 from keyin.errors import DatasetFormatError
+from keyin.paths import inside
 
 FORMAT_VERSION = 1
 TEMPORARY_TAG = ".tmp-"  # a file being written is named .<name>.tmp-<pid> until its rename
@@ -300,7 +301,7 @@ def split_files(folder: Path, split: str, verify: bool = True) -> list[Path]:
         )
     paths = []
     for entry in entries:
-        path = folder / entry["file"]
+        path = inside(folder, entry["file"], str(folder / MANIFEST_NAME))
         if not path.is_file():
             raise DatasetFormatError(
                 f"shard {path} listed in the manifest is missing; re-run `keyin-generate` to "

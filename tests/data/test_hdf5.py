@@ -19,7 +19,7 @@ from keyin.data.hdf5 import (
     split_files,
     write_shard,
 )
-from keyin.errors import DatasetFormatError
+from keyin.errors import DatasetFormatError, UnsafePathError
 
 ATTRS = {"generator": "test", "config": {"a": 1}, "seed": 3, "split": "test", "n_cond": 2}
 
@@ -158,3 +158,19 @@ def test_a_file_without_clips_is_refused(tmp_path):
     write_shard(tmp_path / "empty.h5", arrays(n=0), ATTRS)
     with pytest.raises(DatasetFormatError, match="no clips in .*empty.h5; pass a file with clips"):
         ShardClips([tmp_path / "empty.h5"], (8, 8, 1), 2, 4)
+
+
+@pytest.mark.parametrize("name", ["../outside.h5", "/etc/hostname", "sub/../../outside.h5"])
+def test_a_manifest_naming_a_file_outside_its_folder_is_refused(tmp_path, name):
+    folder = tmp_path / "data"
+    generate_dataset(BrownianGenerator(), folder, dataset="brownian", splits={"test": 2}, shard_size=2, seed=0,
+                     progress=False)
+    (tmp_path / "outside.h5").write_bytes((folder / "test-00000.h5").read_bytes())
+    manifest = json.loads((folder / "manifest.json").read_text())
+    manifest["splits"]["test"][0]["file"] = name
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(UnsafePathError, match="outside"):
+        split_files(folder, "test", verify=False)
+    with pytest.raises(UnsafePathError, match="outside"):  # and generation does not touch it
+        generate_dataset(BrownianGenerator(), folder, dataset="brownian", splits={"test": 2}, shard_size=2, seed=0,
+                         progress=False)
