@@ -88,6 +88,7 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         trainer_kwargs=OmegaConf.to_container(cfg.trainer),
         logger=logger,
         config=OmegaConf.to_container(cfg, resolve=True),
+        compile_networks=cfg.compile,
     )
     if not cfg.model.trainable:
         discoverers = {cfg.model.name: instantiate(cfg.model.discoverer)}

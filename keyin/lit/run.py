@@ -44,12 +44,19 @@ def fit_stage(
     trainer_kwargs: Mapping[str, Any],
     logger: Any,
     config: dict[str, Any],
+    compile_networks: bool = False,
 ) -> Path:
     """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present.
+
+    ``compile_networks`` compiles each of the module's networks in place with ``torch.compile``
+    (``nn.Module.compile``: parameter names, so checkpoints, stay the same).
 
     Returns:
         The path of the stage's last checkpoint.
     """
+    if compile_networks:
+        for network in module.children():
+            network.compile()
     folder = Path(run_dir) / "checkpoints" / module.stage
     last = folder / "last.ckpt"
     checkpoints = ModelCheckpoint(
@@ -71,5 +78,5 @@ def fit_stage(
         check_same_model(load_checkpoint(resume, module.stage), resume, module, config)
     # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
     trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
-    trainer.save_checkpoint(last)  # the final state, whatever the checkpoint cadence
+    trainer.save_checkpoint(last, weights_only=False)  # the full final state (optimizer too), whatever the cadence
     return last

@@ -164,3 +164,15 @@ def test_a_full_disk_at_a_checkpoint_keeps_the_previous_one(tmp_path, monkeypatc
     assert "free disk space" in line and "run the same command again" in line
     assert load_checkpoint(stage1_checkpoint(tmp_path))["global_step"] == 2
     assert [p.name for p in stage1_checkpoint(tmp_path).parent.iterdir()] == ["last.ckpt"]
+
+
+@pytest.mark.slow  # torch.compile of every network: minutes of compilation on 2 CPU cores
+def test_compiled_networks_train_and_keep_the_checkpoint_names(tmp_path):
+    assert run("generate", "splits={test: 4}", "progress=false", cwd=tmp_path).returncode == 0
+    runs = {}
+    for name, compiled in (("plain", "false"), ("compiled", "true")):
+        result = run("train", "model=surprise", "scale=smoke", "logger=none", f"compile={compiled}",
+                     "trainer.enable_progress_bar=false", f"hydra.run.dir={name}", cwd=tmp_path)
+        assert result.returncode == 0, result.stderr[-3000:]
+        runs[name] = load_checkpoint(tmp_path / name / "checkpoints" / "surprise" / "last.ckpt")["state_dict"]
+    assert runs["plain"].keys() == runs["compiled"].keys()
