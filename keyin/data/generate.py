@@ -17,7 +17,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Mapping, Protocol
+from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
@@ -38,10 +38,22 @@ from keyin.paths import inside
 SPLIT_OFFSETS = {"train": 0, "val": 100_000_000, "test": 200_000_000}
 
 
+ClipMaker = Callable[[int, int], tuple[dict[str, np.ndarray], int]]
+
+
 class ClipGenerator(Protocol):
+    """``generate(index, seed)``: one clip's arrays and the attempts it took. A generator may also
+    have ``split_makers``, split name -> such a function for splits that are not demos (pushing's
+    ``planning`` tasks)."""
+
     n_cond: int
 
     def generate(self, index: int, seed: int) -> tuple[dict[str, np.ndarray], int]: ...
+
+
+def clip_maker(generator: ClipGenerator, split: str) -> ClipMaker:
+    """The function that makes the clips of ``split``: the generator's own for it, else ``generate``."""
+    return getattr(generator, "split_makers", {}).get(split, generator.generate)
 
 
 @dataclass(frozen=True)
@@ -76,10 +88,10 @@ def write_shard_job(
     generator: ClipGenerator, job: ShardJob, folder: Path, seed: int, meta: Mapping[str, Any]
 ) -> tuple[ShardJob, str, int]:
     """Generate and write one shard; returns the job, its checksum and the attempts it took."""
-    base = split_seed(seed, job.split)
+    base, make = split_seed(seed, job.split), clip_maker(generator, job.split)
     clips, attempts = [], 0
     for index in range(job.start, job.start + job.count):
-        arrays, tries = generator.generate(index, base)
+        arrays, tries = make(index, base)
         clips.append(arrays)
         attempts += tries
     stacked = {name: np.stack([clip[name] for clip in clips]) for name in clips[0]}
@@ -121,6 +133,11 @@ def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[s
             if path.is_file() and sha256_of(path) == entry["sha256"]:
                 done.setdefault(split, {})[entry["file"]] = entry
     return done
+
+
+def recorded_splits(folder: Path) -> dict[str, list[dict]]:
+    """The manifest's shard entries per split as recorded, unchecked ({} without a manifest)."""
+    return read_manifest(folder)["splits"] if (folder / MANIFEST_NAME).is_file() else {}
 
 
 def unrecorded_shard(folder: Path, job: ShardJob, seed: int, meta: Mapping[str, Any]) -> dict | None:
@@ -170,13 +187,14 @@ def generate_dataset(
         if entry is not None:
             done.setdefault(job.split, {})[job.file] = entry
             recovered += 1
-    todo = [job for job in jobs if job.file not in done.get(job.split, {})]
+    todo = [job for job in jobs if done.get(job.split, {}).get(job.file, {}).get("n") != job.count]  # new or resized
     entries = {split: dict(done.get(split, {})) for split in splits}
+    others = {split: shards for split, shards in recorded_splits(folder).items() if split not in splits}
     start_time, clips, attempts = time.perf_counter(), 0, 0
 
     def save_manifest() -> None:
         ordered = {s: [entries[s][name] for name in sorted(entries[s])] for s in entries}
-        write_manifest(folder, dataset, ordered, meta["config"])
+        write_manifest(folder, dataset, {**others, **ordered}, meta["config"])
 
     columns = (
         TextColumn("[bold]{task.description}"),

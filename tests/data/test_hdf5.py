@@ -112,6 +112,17 @@ def test_generation_is_independent_of_worker_count(tmp_path):
         np.testing.assert_array_equal(load_arrays(a)["frames"], load_arrays(b)["frames"])
 
 
+def test_generating_one_split_keeps_the_others_and_a_larger_split_redoes_its_short_shard(tmp_path):
+    kwargs = dict(dataset="brownian", shard_size=2, seed=0, progress=False)
+    generate_dataset(BrownianGenerator(), tmp_path, splits={"test": 2}, **kwargs)
+    generate_dataset(BrownianGenerator(), tmp_path, splits={"val": 1}, **kwargs)
+    assert [f.name for f in split_files(tmp_path, "test")] == ["test-00000.h5"]
+    assert [f.name for f in split_files(tmp_path, "val")] == ["val-00000.h5"]
+    again = generate_dataset(BrownianGenerator(), tmp_path, splits={"val": 3}, **kwargs)  # a larger split
+    assert again["clips"] == 3 and again["shards_skipped"] == 0  # the 1-clip shard is redone with 2
+    assert [inspect_shard(f).n for f in split_files(tmp_path, "val")] == [2, 1]
+
+
 def test_a_folder_of_another_config_is_not_mixed_in(tmp_path):
     kwargs = dict(dataset="brownian", splits={"test": 2}, shard_size=2, seed=0, progress=False)
     generate_dataset(BrownianGenerator(), tmp_path, **kwargs)
