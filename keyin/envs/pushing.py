@@ -131,6 +131,17 @@ class PushingPhysics(mujoco.Physics):
     PUSHER = slice(0, 2)
     PUCK = slice(2, 4)
 
+    def after_reset(self) -> None:
+        """``mj_forward`` with actuation enabled, after ``reset_context()`` and ``copy()``.
+
+        dm_control's ``after_reset`` disables actuation, which leaves ``actuator_velocity`` at 0;
+        the next ``step`` starts with ``mj_step2`` (it trusts that ``mj_step1`` ran), so its first
+        physics step lost the velocity servo's damping ``-kv v`` (0.005 units off after one
+        environment step from a state with the pusher moving). The forces computed here from the
+        stale controls are never used: every step sets the controls first (``Pushing.before_step``).
+        """
+        self.forward()
+
     def puck_position(self) -> np.ndarray:
         """(2,) copy of the puck centre."""
         return self.data.qpos[self.PUCK].copy()

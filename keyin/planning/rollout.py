@@ -15,10 +15,8 @@ clipping it to [-1, 1] (:func:`action_controls` does the same). The two agree bi
 (tests/planning/test_rollout.py) when the rollout starts from the full physics state *and* the
 solver warm start (``qacc_warmstart``) of the environment.
 
-A dm_control ``Physics.copy`` runs ``mj_forward`` with actuation disabled, which leaves
-``actuator_velocity`` at 0; its first ``step`` (``mj_step2`` first, trusting that ``mj_step1`` ran)
-then drops the velocity servo's damping ``-kv v`` for one physics step. :class:`LoopRollout` calls
-``forward()`` on each copy to bring it back in line with the environment.
+A copy is ready to step: ``PushingPhysics.after_reset`` (run by ``Physics.copy``) recomputes
+``actuator_velocity``, which dm_control's own leaves at 0 (docs/planning.md, "dm_control pitfall").
 """
 
 from __future__ import annotations
@@ -106,7 +104,6 @@ class LoopRollout:
         finals = []
         for sequence in np.asarray(actions, dtype=np.float64):
             physics = self._env.physics.copy(share_model=True)
-            physics.forward()  # the copy's actuator_velocity is stale (module docstring)
             for action in sequence:
                 for _ in range(self._steps):
                     self._env.task.before_step(action, physics)
