@@ -1,10 +1,103 @@
-"""keyin-plan: hierarchical planning (paper Table 2); not built yet."""
+"""keyin-plan planner=<name>: play the fixed pushing planning tasks (paper Table 2).
 
-from keyin.cli.pending import not_available
+One JSON line per finished task in ``<run dir>/tasks.jsonl``; the same command with
+``resume=<run dir>`` (or a sweep's fixed job dir) skips the finished tasks. ``metrics.json`` (and
+the last line printed) holds the mean ± std position error and the success rate over the tasks.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
+from keyin.cli.checks import check_common, require_positive_int
+from keyin.data.hdf5 import sha256_of, split_files
+from keyin.data.pushing import PLANNING_SPLIT
+from keyin.errors import ConfigError, DatasetFormatError
+from keyin.eval.planning import planning_summary
+from keyin.planning.journal import claim_run_dir
+from keyin.planning.runner import PlanJob, run_tasks
+from keyin.planning.servo import ServoParams
+from keyin.planning.tasks import read_tasks, task_generator
+
+AVAILABLE = "initial, random, no_subgoals, demo_subgoals"
 
 
-def main() -> None:
-    not_available("keyin-plan", "Hierarchical planning with keyframes (paper Table 2)")
+def task_files(cfg: DictConfig) -> list[Path]:
+    if cfg.data is not None:
+        return [Path(cfg.data)]
+    try:
+        return split_files(Path(cfg.data_dir) / cfg.dataset.name, PLANNING_SPLIT)
+    except DatasetFormatError as err:
+        raise DatasetFormatError(
+            f"{err} (the planning tasks: keyin-generate dataset=pushing 'splits={{{PLANNING_SPLIT}: 240}}')"
+        ) from None
+
+
+def check_plan(cfg: DictConfig) -> float:
+    """The checks beyond the common ones; returns the success threshold."""
+    check_common(cfg)
+    require_positive_int(cfg.workers, "workers")
+    if cfg.tasks is not None:
+        require_positive_int(cfg.tasks, "tasks")
+    threshold = cfg.success_threshold
+    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 0:
+        raise ConfigError(f"success_threshold={threshold!r} must be a positive number (world units)")
+    if cfg.planner.get("controller") is None:
+        raise ConfigError(
+            f"planner={cfg.planner.name} needs its trained pushing model, which has not landed yet; "
+            f"planners available now: {AVAILABLE}"
+        )
+    return float(threshold)
+
+
+@user_errors
+def plan(cfg: DictConfig) -> dict:
+    threshold = check_plan(cfg)
+    files = task_files(cfg)
+    tasks, generator_config = read_tasks(files)
+    tasks = tasks[: cfg.tasks]
+    folder = run_dir()
+    claim_run_dir(folder, {
+        "planner": {k: v for k, v in OmegaConf.to_container(cfg.planner, resolve=True).items() if k != "servo_threads"},
+        "seed": cfg.seed,
+        "success_threshold": threshold,
+        "task_files": {path.name: sha256_of(path) for path in files},
+    })
+    job = PlanJob(
+        planner=cfg.planner.name,
+        controller=instantiate(cfg.planner.controller),
+        servo=ServoParams.from_config(cfg.planner),
+        generator=task_generator(generator_config),
+        seed=cfg.seed,
+        threshold=threshold,
+    )
+    records, counts = run_tasks(job, tasks, folder / "tasks.jsonl", cfg.workers, cfg.progress)
+    if counts["skipped"]:
+        print(f"{counts['skipped']} of {len(tasks)} tasks finished earlier in {folder}; skipped")
+    metrics = planning_summary(
+        np.array([r["final_error"] for r in records]), np.array([r["initial_distance"] for r in records]), threshold
+    )
+    metrics.update(
+        planner=cfg.planner.name,
+        dataset=cfg.dataset.name,
+        seed=cfg.seed,
+        success_threshold=threshold,
+        steps_mean=float(np.mean([r["steps"] for r in records])),
+        seconds_per_task=float(np.mean([r["seconds"] for r in records])),
+        **counts,
+    )
+    write_metrics(metrics, folder)
+    return metrics
+
+
+@keyin_main("plan")
+def main(cfg: DictConfig) -> None:
+    plan(cfg)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,10 @@
-"""keyin-report <sweep dir>: the paper's Table 1 from a sweep's metrics.json files.
+"""keyin-report <sweep dir>: the paper's Table 1 and/or Table 2 from a sweep's metrics.json files.
 
-Writes ``table1.md``, ``table1.csv``, ``table1_f1.png`` (bars with the paper's numbers) and, per
-dataset, ``examples_<dataset>.png`` (each method's keyframes on the first test clips) into
-``--out`` (default: ``<sweep dir>/report``).
+For keyframe jobs (keyin-train, keyin-eval) writes ``table1.md``, ``table1.csv``, ``table1_f1.png``
+(bars with the paper's numbers) and, per dataset, ``examples_<dataset>.png`` (each method's
+keyframes on the first test clips); for planning jobs (keyin-plan) ``table2.md``, ``table2.csv``
+and ``table2_success.png`` (success rate against the threshold); into ``--out`` (default:
+``<sweep dir>/report``).
 """
 
 from __future__ import annotations
@@ -20,9 +22,24 @@ from keyin.cli.app import fail
 from keyin.data.datamodule import split_clips
 from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
-from keyin.eval.report import collect_metrics, csv_table, markdown_table, method_sort_key, summarise
+from keyin.eval.planning_report import (
+    collect_planning,
+    planning_csv,
+    planning_markdown,
+    summarise_planning,
+    sweep_threshold,
+)
+from keyin.eval.report import (
+    collect_metrics,
+    csv_table,
+    is_planning,
+    markdown_table,
+    method_sort_key,
+    read_metrics,
+    summarise,
+)
 from keyin.paths import inside
-from keyin.viz.report import save_f1_bars, save_method_comparison
+from keyin.viz.report import save_f1_bars, save_method_comparison, save_success_curves
 
 
 def example_predictions(records: list[dict], dataset: str) -> tuple[Path, dict[str, list[list[int]]], list[list[int]]]:
@@ -52,10 +69,41 @@ def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
     return frames, dataset.n_cond
 
 
-def report(sweep: Path, out: Path, n_examples: int) -> list[Path]:
+def report(sweep: Path, out: Path, n_examples: int, threshold: float | None = None) -> list[Path]:
+    """Table 2 from the sweep's keyin-plan jobs and Table 1 from its keyframe jobs (whichever it has)."""
+    jobs = read_metrics(sweep)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    if any(is_planning(metrics) for _, metrics in jobs):
+        written += planning_table(sweep, out, threshold)
+    if not all(is_planning(metrics) for _, metrics in jobs):
+        written += keyframe_table(sweep, out, n_examples)
+    return written
+
+
+def planning_table(sweep: Path, out: Path, threshold: float | None) -> list[Path]:
+    """``table2.md``, ``table2.csv`` and ``table2_success.png`` (success rate against the threshold)."""
+    jobs = collect_planning(sweep)
+    threshold = sweep_threshold(jobs) if threshold is None else threshold
+    rows = summarise_planning(jobs, threshold)
+    header = (
+        f"# Planning on the pushing tasks (paper Table 2)\n\nFrom `{sweep}` by `keyin-report {sweep}` on "
+        f"{date.today()}; final shortest-path distance to the goal around the wall (world units), mean ± std "
+        f"over tasks; success = final error ≤ {threshold:g}. The paper states no threshold (REFERENCE §5.2): "
+        f"compare the curve in table2_success.png.\n\n"
+    )
+    written = [out / "table2.md", out / "table2.csv"]
+    atomic_write_text(written[0], header + planning_markdown(rows, threshold))
+    atomic_write_text(written[1], planning_csv(rows, threshold))
+    written.append(save_success_curves(rows, threshold, out / "table2_success.png"))
+    print(header + planning_markdown(rows, threshold))
+    return written
+
+
+def keyframe_table(sweep: Path, out: Path, n_examples: int) -> list[Path]:
+    """``table1.md``, ``table1.csv``, ``table1_f1.png`` and the example figures."""
     records = collect_metrics(sweep)
     rows = summarise(records)
-    out.mkdir(parents=True, exist_ok=True)
     header = (
         f"# Keyframe discovery F1 (paper Table 1)\n\nFrom `{sweep}` by `keyin-report {sweep}` on {date.today()}; "
         f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips. Scales: "
@@ -81,11 +129,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("sweep", type=Path, help="a sweep dir (e.g. runs/multirun/brownian_table1)")
     parser.add_argument("--out", type=Path, default=None, help="output dir (default: <sweep>/report)")
     parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures")
+    parser.add_argument("--threshold", type=float, default=None,
+                        help="Table 2's success threshold in world units (default: the one the jobs used)")
     args = parser.parse_args(argv)
     if not args.sweep.is_dir():
-        fail(f"{args.sweep} is not a directory; pass the sweep dir of keyin-train -m")
+        fail(f"{args.sweep} is not a directory; pass the sweep dir of keyin-train -m or keyin-plan -m")
     try:
-        for path in report(args.sweep, args.out or args.sweep / "report", args.examples):
+        for path in report(args.sweep, args.out or args.sweep / "report", args.examples, args.threshold):
             print(f"wrote {path}")
     except (KeyinError, ValueError) as err:
         fail(str(err))

@@ -19,11 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from keyin.data.generate import ClipMaker, split_seed
 from keyin.data.hdf5 import write_shard
 
 N_SUBGOAL_SLOTS = 6  # the ``subgoals`` array is (6, 2) whatever n_pushes is (unused rows repeat the goal)
 _ENVS: dict = {}  # one pixel-free environment per generator config and process
 RENDERERS = ("analytic", "mujoco")
+PLANNING_SPLIT = "planning"  # the fixed planning tasks (REFERENCE §5.2), a split of their own
 
 
 @dataclass(frozen=True)
@@ -208,19 +210,41 @@ class PushingGenerator:
             ``goal_image`` (H, W, 3) uint8 (the goal image is the demo's last frame), ``goal`` (2,)
             and ``start`` (2,) puck positions, ``wall`` (5,), ``layout`` (11,)
             (:meth:`keyin.envs.layout.Layout.as_array`, whose goal is the demo's final puck
-            position), ``initial_distance`` () shortest path start -> goal.
+            position), ``initial_distance`` () shortest path start -> goal, and the demo's own
+            subgoals as its keyframes show them: ``subgoal_frames`` (P, H, W, 3) uint8, the saved
+            frame that completes each of the P pushes (the clips' ``keyframes``), and
+            ``subgoal_puck`` (P, 2) the puck in them.
         """
+        return self._task_arrays(self.demo(index, seed)[0])
+
+    def planning_clip(self, index: int, seed: int) -> tuple[dict[str, np.ndarray], int]:
+        """:meth:`planning_task` as a clip of the ``planning`` split (``keyin-generate``): ``frames``
+        (2, H, W, 3) the start and the goal image, ``length`` 2, the other arrays as they are;
+        and the demos drawn until one was accepted."""
+        demo, attempts = self.demo(index, seed)
+        task = self._task_arrays(demo)
+        frames = np.stack([task.pop("start_image"), task.pop("goal_image")])
+        return {"frames": frames, "length": np.int32(2), **task}, attempts
+
+    @property
+    def split_makers(self) -> dict[str, ClipMaker]:
+        """Splits whose clips are not demos (``keyin.data.generate``): the planning tasks."""
+        return {PLANNING_SPLIT: self.planning_clip}
+
+    def _task_arrays(self, demo: Any) -> dict[str, np.ndarray]:
+        """:meth:`planning_task`'s arrays from an accepted demo."""
         from keyin.envs.geometry import shortest_path_length
         from keyin.envs.layout import Layout
 
-        demo, _ = self.demo(index, seed)
-        start_image, goal_image = self.render_demo(demo, np.array([0, -1]))
+        last = len(demo.states) - 1
+        completions = np.minimum(demo.saved_completions(self.frame_skip) * self.frame_skip, last)  # raw frames
+        images = self.render_demo(demo, np.concatenate([[0, last], completions]))
         goal = demo.puck[-1]
         layout = Layout(demo.layout.wall, demo.layout.start, goal, demo.layout.home)
         return {
             "state": demo.states[0].copy(),
-            "start_image": start_image,
-            "goal_image": goal_image,
+            "start_image": images[0],
+            "goal_image": images[1],
             "start": demo.puck[0].copy(),
             "goal": goal.copy(),
             "wall": demo.layout.wall.copy(),
@@ -228,28 +252,25 @@ class PushingGenerator:
             "initial_distance": np.float64(
                 shortest_path_length(demo.puck[0], goal, demo.layout.wall, self.puck_radius)
             ),
+            "subgoal_frames": images[2:],
+            "subgoal_puck": demo.puck[completions].copy(),
         }
 
 
 def write_planning_tasks(path: Path, generator: PushingGenerator, n: int = 240, seed: int = 0) -> str:
     """Write ``n`` planning tasks as one keyin shard (``split = "planning"``) and return its SHA-256.
 
-    Each task is a 2-frame clip: ``frames[:, 0]`` the start image (the conditioning frame,
-    ``n_cond = 1``), ``frames[:, 1]`` the goal image; ``length`` is 2. Further arrays: ``state``
-    (n, S), ``start``/``goal`` (n, 2), ``wall`` (n, 5), ``layout`` (n, 11), ``initial_distance``
-    (n,). Task ``i`` uses ``split_seed(seed, "planning") + i``, a seed range no train/val/test clip
-    uses.
+    Each task is a 2-frame clip (:meth:`PushingGenerator.planning_clip`): ``frames[:, 0]`` the start
+    image (the conditioning frame, ``n_cond = 1``), ``frames[:, 1]`` the goal image; ``length`` is
+    2. Further arrays: ``state`` (n, S), ``start``/``goal`` (n, 2), ``wall`` (n, 5), ``layout``
+    (n, 11), ``initial_distance`` (n,), ``subgoal_frames`` (n, P, H, W, 3), ``subgoal_puck``
+    (n, P, 2). Task ``i`` uses ``split_seed(seed, "planning") + i``, a seed range no
+    train/val/test clip uses; ``keyin-generate dataset=pushing 'splits={planning: 240}'`` writes
+    the same tasks into the dataset folder.
     """
-    from keyin.data.generate import split_seed
-
-    base = split_seed(seed, "planning")
-    tasks = [generator.planning_task(i, base) for i in range(n)]
-    arrays = {
-        "frames": np.stack([np.stack([t["start_image"], t["goal_image"]]) for t in tasks]),
-        "length": np.full(n, 2, dtype=np.int32),
-    }
-    for name in ("state", "start", "goal", "wall", "layout", "initial_distance"):
-        arrays[name] = np.stack([t[name] for t in tasks])
+    base = split_seed(seed, PLANNING_SPLIT)
+    tasks = [generator.planning_clip(i, base)[0] for i in range(n)]
+    arrays = {name: np.stack([task[name] for task in tasks]) for name in tasks[0]}
     attrs = {"generator": type(generator).__name__, "config": asdict(generator), "seed": base,
-             "split": "planning", "n_cond": 1}
+             "split": PLANNING_SPLIT, "n_cond": 1}
     return write_shard(Path(path), arrays, attrs)

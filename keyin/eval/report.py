@@ -3,6 +3,8 @@
 Every training or evaluation job writes ``metrics.json`` (method, dataset, seed, scores, and the
 ``variants`` of a method, e.g. Surprise without its index shift). A table row is one
 (dataset, method): the mean and standard deviation over seeds, with the paper's figure beside it.
+``keyin-plan`` jobs (their metrics name a ``planner``) make Table 2 instead
+(:mod:`keyin.eval.planning_report`).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Hashable, Iterable
 
 import numpy as np
 
@@ -38,25 +40,42 @@ class TableRow:
     paper_f1: float | None
 
 
+def read_metrics(root: Path) -> list[tuple[Path, dict[str, Any]]]:
+    """Every job's ``metrics.json`` under ``root``: (the job's folder, its content).
+
+    Raises:
+        ValueError: if there is none.
+    """
+    jobs = [(path.parent, json.loads(path.read_text())) for path in sorted(Path(root).rglob("metrics.json"))]
+    if not jobs:
+        raise ValueError(f"no metrics.json under {root}; run the sweep first (keyin-train -m ... or keyin-plan -m ...)")
+    return jobs
+
+
+def is_planning(metrics: dict[str, Any]) -> bool:
+    """A ``keyin-plan`` job's metrics (Table 2) rather than a keyframe job's (Table 1)."""
+    return "planner" in metrics
+
+
 def collect_metrics(root: Path) -> list[dict[str, Any]]:
-    """Every job's metrics under ``root``, one record per method and variant.
+    """Every keyframe job's metrics under ``root``, one record per method and variant (planning jobs
+    are left out).
 
     Raises:
         ValueError: if no metrics.json is found, or one lacks method/dataset/f1.
     """
     records = []
-    for path in sorted(Path(root).rglob("metrics.json")):
-        metrics = json.loads(path.read_text())
+    for folder, metrics in read_metrics(root):
+        if is_planning(metrics):
+            continue
         missing = [key for key in ("method", "dataset", "f1") if key not in metrics]
         if missing:
-            raise ValueError(f"{path} lacks {', '.join(missing)}: not a keyin metrics.json")
+            raise ValueError(f"{folder / 'metrics.json'} lacks {', '.join(missing)}: not a keyin metrics.json")
         common = {key: metrics.get(key) for key in ("dataset", "seed", "scale")}
-        common.update(seed=metrics.get("seed", 0), path=str(path.parent))
+        common.update(seed=metrics.get("seed", 0), path=str(folder))
         records.append({**metrics, **common})
         for name, scores in metrics.get("variants", {}).items():
             records.append({**scores, **common, "method": name})
-    if not records:
-        raise ValueError(f"no metrics.json under {root}; run the sweep first (keyin-train -m ...)")
     return records
 
 
@@ -66,21 +85,33 @@ def method_sort_key(method: str) -> tuple[int, str]:
     return (METHOD_ORDER.index(base) if base in METHOD_ORDER else len(METHOD_ORDER), method)
 
 
+def group_by_seed(
+    records: Iterable[dict[str, Any]], key: Callable[[dict], Hashable], describe: Callable[[dict], str]
+) -> dict[Hashable, dict[int, dict[str, Any]]]:
+    """Records (each with ``seed`` and ``path``) grouped by ``key``, then by seed.
+
+    Raises:
+        ValueError: if a group has a seed twice (two sweeps under one root), naming both files.
+    """
+    groups: dict[Hashable, dict[int, dict[str, Any]]] = {}
+    for record in records:
+        seeds = groups.setdefault(key(record), {})
+        if record["seed"] in seeds:
+            raise ValueError(
+                f"{describe(record)} with seed {record['seed']} appears twice ({seeds[record['seed']]['path']} "
+                f"and {record['path']}); report one sweep at a time"
+            )
+        seeds[record["seed"]] = record
+    return groups
+
+
 def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
     """Mean and standard deviation (n - 1; 0 for one seed) over seeds of each (dataset, method).
 
     Raises:
         ValueError: if a (dataset, method, seed) appears twice (two sweeps under one root).
     """
-    groups: dict[tuple[str, str], dict[int, dict[str, Any]]] = {}
-    for record in records:
-        seeds = groups.setdefault((record["dataset"], record["method"]), {})
-        if record["seed"] in seeds:
-            raise ValueError(
-                f"{record['method']} on {record['dataset']} with seed {record['seed']} appears twice "
-                f"({seeds[record['seed']]['path']} and {record['path']}); report one sweep at a time"
-            )
-        seeds[record["seed"]] = record
+    groups = group_by_seed(records, lambda r: (r["dataset"], r["method"]), lambda r: f"{r['method']} on {r['dataset']}")
     rows = []
     for (dataset, method), by_seed in sorted(groups.items(), key=lambda item: (item[0][0], method_sort_key(item[0][1]))):
         values = {score: np.array([float(r.get(score, math.nan)) for r in by_seed.values()]) for score in SCORES}

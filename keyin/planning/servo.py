@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from keyin.envs.geometry import apply_homography, shortest_path_length
+from keyin.envs.geometry import apply_homography
 from keyin.envs.segmentation import puck_centroid
 from keyin.planning.cem import CEMParams, cem
 from keyin.planning.rollout import BatchRollout, Simulator
@@ -197,7 +197,6 @@ def run_servo(
         pusher.append(physics.pusher_position())
         if ended:
             break
-    layout = env.task.layout
     goal_px = pixel_cost(homography, targets[-1], puck[-1][None])[0]
     return ServoTrajectory(
         puck=np.stack(puck),
@@ -206,5 +205,5 @@ def run_servo(
         actions=np.asarray(actions, dtype=np.float64).reshape(-1, 2),
         plan_cost=np.asarray(costs, dtype=np.float64),
         reached_goal=bool(goal_px < params.goal_threshold_px),
-        final_error=shortest_path_length(puck[-1], layout.goal, layout.wall, env.task.scene.puck_radius),
+        final_error=env.task.goal_distance(physics),
     )

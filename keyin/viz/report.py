@@ -1,4 +1,5 @@
-"""Charts: Table 1 as bars, the methods' keyframes on test clips, the histogram of chosen offsets."""
+"""Charts: Table 1 as bars, the methods' keyframes on test clips, the histogram of chosen offsets,
+Table 2's success rate against the success threshold."""
 
 from __future__ import annotations
 
@@ -12,8 +13,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
+from keyin.eval.planning import success_curve  # noqa: E402
+from keyin.eval.planning_report import PlanningRow  # noqa: E402
 from keyin.eval.report import TableRow  # noqa: E402
 from keyin.viz.keyframes import marked_frames  # noqa: E402
+
+
+def save_figure(fig: plt.Figure, path: Path, dpi: int) -> Path:
+    """Write ``fig`` to ``path`` (creating its folder) and close it."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
 
 
 def save_f1_bars(rows: Sequence[TableRow], path: Path) -> Path:
@@ -34,11 +46,7 @@ def save_f1_bars(rows: Sequence[TableRow], path: Path) -> Path:
         ax.set_title(dataset)
         ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
 
 
 def save_method_comparison(
@@ -72,11 +80,7 @@ def save_method_comparison(
                           fontsize=7, labelpad=4)
             ax.set_ylim(height - 0.5, -0.5)
     fig.subplots_adjust(left=0.12, right=0.995, top=0.995, bottom=0.005, hspace=0.08)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def save_offset_histogram(offsets: torch.Tensor, max_offset: int, path: Path, title: str = "") -> Path:
@@ -100,8 +104,22 @@ def save_offset_histogram(offsets: torch.Tensor, max_offset: int, path: Path, ti
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=100)
+
+
+def save_success_curves(rows: Sequence[PlanningRow], threshold: float, path: Path) -> Path:
+    """Success rate against the success threshold (world units of final shortest-path error), one
+    line per planner; the threshold of the table dashed."""
+    top = max(1.6, max(float(row.errors.max()) for row in rows) + 0.05)
+    thresholds = np.linspace(0.0, top, 321)
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    for row in rows:
+        ax.plot(thresholds, success_curve(row.errors, thresholds), label=f"{row.planner} ({len(row.errors)} tasks)")
+    ax.axvline(threshold, color="black", linestyle="--", linewidth=1, label=f"threshold {threshold:g}")
+    ax.set_xlim(0, top)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("success threshold: final shortest-path error (world units)")
+    ax.set_ylabel("success rate")
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=120)

@@ -48,14 +48,8 @@ def test_eval_reads_any_file_given_by_path(brownian_test_set):
     assert last_json(result.stdout)["n_sequences"] == 15
 
 
-def test_commands_not_built_yet_say_so_and_exit_2(tmp_path):
-    result = run("plan", cwd=tmp_path)
-    assert result.returncode == 2
-    assert "not available yet" in result.stderr
-
-
 def test_console_scripts_are_installed_next_to_the_interpreter(tmp_path):
     script = Path(sys.executable).parent / "keyin-plan"
-    result = subprocess.run([str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60)
-    assert result.returncode == 2 and "keyin-plan is not available yet" in result.stderr
+    result = subprocess.run([str(script), "planner=keyin"], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2 and "error: planner=keyin needs its trained pushing model" in result.stderr
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import keyin.envs
-from keyin.data.hdf5 import inspect_shard, load_arrays
+from keyin.data.generate import generate_dataset
+from keyin.data.hdf5 import inspect_shard, load_arrays, split_files
 from keyin.data.pushing import PushingGenerator, write_planning_tasks
 from keyin.envs.geometry import apply_homography
 from keyin.envs.layout import Layout
@@ -95,10 +96,17 @@ def test_planning_tasks_file(tmp_path):
     arrays = load_arrays(path)
     assert arrays["state"].shape == (2, 8) and arrays["layout"].shape == (2, 11)
     assert np.all((arrays["initial_distance"] > 1.0) & (arrays["initial_distance"] < 1.6))
-    # The goal image shows the puck at the goal position.
+    assert arrays["subgoal_frames"].shape == (2, 6, 64, 64, 3) and arrays["subgoal_puck"].shape == (2, 6, 2)
+    # The goal image shows the puck at the goal position, each subgoal frame the puck at its subgoal.
     homography = GENERATOR.environment().physics.homography()
     centroids, _ = puck_centroid(arrays["frames"][:, 1])
     assert np.all(np.linalg.norm(centroids - apply_homography(homography, arrays["goal"]), axis=-1) < 1.0)
+    centroids, _ = puck_centroid(arrays["subgoal_frames"].reshape(-1, 64, 64, 3))
+    expected = apply_homography(homography, arrays["subgoal_puck"].reshape(-1, 2))
+    assert np.all(np.linalg.norm(centroids - expected, axis=-1) < 1.0)
+    # The last push ends at the goal; the others are spread along the detour.
+    assert np.all(np.linalg.norm(arrays["subgoal_puck"][:, -1] - arrays["goal"], axis=-1) < 0.05)
+    assert np.all(np.linalg.norm(np.diff(arrays["subgoal_puck"], axis=1), axis=-1) > 0.05)
     # A planner restores a task by pinning its layout and state; the first frame matches.
     env = keyin.envs.load("pushing", seed=0)
     for k in range(2):
@@ -107,6 +115,17 @@ def test_planning_tasks_file(tmp_path):
         assert np.array_equal(step.observation["pixels"], arrays["frames"][k, 0])
         assert np.allclose(step.observation["goal"], arrays["goal"][k])
         assert np.allclose(env.physics.get_state(), arrays["state"][k])
+
+
+def test_keyin_generate_writes_the_same_tasks_as_the_planning_split(tmp_path):
+    write_planning_tasks(tmp_path / "tasks.h5", GENERATOR, n=2, seed=0)
+    generate_dataset(GENERATOR, tmp_path / "pushing", "pushing", {"planning": 2}, 2, 0, progress=False)
+    (shard,) = split_files(tmp_path / "pushing", "planning")
+    assert inspect_shard(shard).split == "planning"
+    expected, written = load_arrays(tmp_path / "tasks.h5"), load_arrays(shard)
+    assert set(written) == set(expected)
+    for name, value in expected.items():
+        np.testing.assert_array_equal(written[name], value, err_msg=name)
 
 
 def test_config_mirrors_the_generator():

@@ -7,7 +7,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from keyin.envs.geometry import apply_homography
-from keyin.planning.servo import ServoParams, advance_subgoal, run_servo, subgoal_pixels
+from keyin.planning.servo import CONFIG_KEYS, ServoParams, advance_subgoal, run_servo, subgoal_pixels
 
 # A small, fast budget; the pusher starts right behind the puck.
 FAST = ServoParams(horizon=4, samples=40, elites=5, iterations=2, max_timesteps=8)
@@ -72,7 +72,8 @@ def test_subgoal_images_invisible_subgoals_and_goal_check(env):
 
 
 def test_params_from_the_planner_config():
-    config = OmegaConf.load(Path(__file__).parents[2] / "conf" / "planner" / "keyin.yaml")
+    config = OmegaConf.load(Path(__file__).parents[2] / "conf" / "planner" / "low_level" / "servo.yaml")
+    assert set(config) == set(CONFIG_KEYS)  # every planner includes these
     params = ServoParams.from_config(config)
     assert params == ServoParams()  # the dataclass defaults are the paper's / the config's numbers
     assert params.cem_params().low == -1.0 and params.cem_params().samples == 200

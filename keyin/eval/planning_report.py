@@ -1,0 +1,155 @@
+"""The paper's Table 2 from a ``keyin-plan`` sweep: every job's tasks, pooled per planner, formatted.
+
+A job is a run dir with ``metrics.json`` (``planner``, ``seed``, ``n_tasks``, ``success_threshold``)
+and ``tasks.jsonl`` (one final position error per task). A row is one planner: the mean ± std over
+all its tasks (of every seed; the paper's ± is over episodes), the success rate at one threshold,
+and the paper's numbers beside ours.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from keyin.eval.planning import planning_summary
+from keyin.eval.report import group_by_seed, is_planning, read_metrics
+from keyin.planning.journal import parse_journal
+
+# Paper Table 2 (REFERENCE §5.3): position error mean, std and success rate in % (None: "-").
+PAPER_TABLE2 = {
+    "initial": (1.32, 0.06, None),
+    "random": (1.32, 0.07, None),
+    "no_subgoals": (0.90, 0.14, 15.0),
+    "tap": (0.80, 0.16, 23.3),
+    "surprise": (0.64, 0.28, 50.8),
+    "jumpy": (0.62, 0.33, 58.8),
+    "keyin": (0.50, 0.26, 64.2),
+}
+PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
+
+
+@dataclass
+class PlanningRow:
+    """One planner over all its tasks.
+
+    Attributes:
+        errors, initial: (n,) final and initial shortest-path distances of its tasks.
+        summary: :func:`keyin.eval.planning.planning_summary` of them.
+        paper: the paper's (error mean, error std, success %) or None.
+    """
+
+    planner: str
+    seeds: list[int]
+    errors: np.ndarray
+    initial: np.ndarray
+    steps_mean: float
+    summary: dict[str, float | int]
+    paper: tuple[float, float, float | None] | None
+
+
+def collect_planning(root: Path) -> list[dict[str, Any]]:
+    """Every planning job under ``root``: its metrics plus ``tasks``, the records of the ``n_tasks``
+    tasks it reported (the first ones of the split), and ``path``.
+
+    Raises:
+        ValueError: a job whose tasks.jsonl holds fewer tasks than its metrics.json counts.
+    """
+    jobs = []
+    for folder, metrics in read_metrics(root):
+        if not is_planning(metrics):
+            continue
+        records = sorted(parse_journal(folder / "tasks.jsonl")[0], key=lambda record: record["task"])
+        tasks = records[: metrics["n_tasks"]]
+        if len(tasks) < metrics["n_tasks"]:
+            raise ValueError(
+                f"{folder / 'tasks.jsonl'} holds {len(tasks)} tasks but its metrics.json counts "
+                f"{metrics['n_tasks']}; run the job again to rebuild it"
+            )
+        jobs.append({**metrics, "seed": metrics.get("seed", 0), "tasks": tasks, "path": str(folder)})
+    return jobs
+
+
+def sweep_threshold(jobs: list[dict[str, Any]]) -> float:
+    """The success threshold all jobs used.
+
+    Raises:
+        ValueError: if they used different ones.
+    """
+    thresholds = sorted({float(job["success_threshold"]) for job in jobs})
+    if len(thresholds) != 1:
+        raise ValueError(f"the jobs used different success thresholds {thresholds}; choose one with --threshold")
+    return thresholds[0]
+
+
+def planner_sort_key(planner: str) -> tuple[int, str]:
+    """Table order: the paper's rows, then the oracle, then anything else."""
+    return (PLANNER_ORDER.index(planner) if planner in PLANNER_ORDER else len(PLANNER_ORDER), planner)
+
+
+def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[PlanningRow]:
+    """One row per planner, its tasks of every seed pooled.
+
+    Raises:
+        ValueError: if a (planner, seed) appears twice (two sweeps under one root).
+    """
+    groups = group_by_seed(jobs, lambda job: job["planner"], lambda job: f"planner {job['planner']}")
+    rows = []
+    for planner in sorted(groups, key=planner_sort_key):
+        tasks = [task for job in groups[planner].values() for task in job["tasks"]]
+        errors = np.array([task["final_error"] for task in tasks], dtype=np.float64)
+        initial = np.array([task["initial_distance"] for task in tasks], dtype=np.float64)
+        rows.append(
+            PlanningRow(
+                planner=planner,
+                seeds=sorted(groups[planner]),
+                errors=errors,
+                initial=initial,
+                steps_mean=float(np.mean([task["steps"] for task in tasks])),
+                summary=planning_summary(errors, initial, threshold),
+                paper=PAPER_TABLE2.get(planner),
+            )
+        )
+    return rows
+
+
+def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
+    """Table 2 as Markdown: position error mean ± std and success rate, ours beside the paper's."""
+    lines = [
+        f"| planner | position error (ours) | position error (paper) | success ≤ {threshold:g} (ours) | "
+        f"success (paper) | final / initial | steps | tasks | seeds |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in rows:
+        s = row.summary
+        paper_error = "–" if row.paper is None else f"{row.paper[0]:.2f} ± {row.paper[1]:.2f}"
+        paper_success = "–" if row.paper is None or row.paper[2] is None else f"{row.paper[2]:.1f} %"
+        lines.append(
+            f"| {row.planner} | {s['position_error_mean']:.2f} ± {s['position_error_std']:.2f} | {paper_error} | "
+            f"{100 * s['success_rate']:.1f} % | {paper_success} | {s['relative_error_mean']:.2f} | "
+            f"{row.steps_mean:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def planning_csv(rows: list[PlanningRow], threshold: float) -> str:
+    """The same table as CSV (success rate as a fraction; the paper's in %)."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    stats = ("position_error_mean", "position_error_std", "success_rate", "relative_error_mean",
+             "initial_distance_mean")
+    writer.writerow(["planner", "seeds", "n_tasks", "success_threshold", *stats, "steps_mean",
+                     "paper_error_mean", "paper_error_std", "paper_success_percent"])
+    for row in rows:
+        paper = row.paper or (None, None, None)
+        writer.writerow(
+            [row.planner, " ".join(map(str, row.seeds)), row.summary["n_tasks"], f"{threshold:g}"]
+            + [f"{row.summary[stat]:.6g}" for stat in stats]
+            + [f"{row.steps_mean:.6g}"]
+            + ["" if value is None else value for value in paper]
+        )
+    return out.getvalue()

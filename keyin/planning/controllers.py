@@ -1,0 +1,78 @@
+"""What ``keyin-plan`` runs on a task: one row of the paper's Table 2 (REFERENCE §4, §7).
+
+A controller plays one task from its start state in the pixel-free environment and reports an
+:class:`Outcome`. Every controller gets the same low-level settings (``ServoParams``: the paper
+uses "the same low-level planner" for all methods, so only the subgoals differ):
+
+* :class:`Hierarchical`: a high-level planner (:mod:`keyin.planning.subgoals`) proposes subgoal
+  images, the goal image is appended, and the CEM servo (:func:`run_servo`) works through them;
+* :class:`StayPut` (*Initial*): no motion, the error is the start's distance to the goal;
+* :class:`RandomActions` (*Random*): uniform random actions in ``[-a_max, a_max]²`` for
+  ``max_timesteps`` servo steps (each held ``action_repeat`` environment steps), no planning.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from keyin.planning.servo import ServoParams, execute, run_servo, subgoal_pixels
+from keyin.planning.subgoals import SubgoalPlanner
+from keyin.planning.tasks import PlanningTask
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One task's result.
+
+    Attributes:
+        final_error: shortest path around the wall from the final puck to the goal (REFERENCE §5.2).
+        steps: servo steps executed.
+        subgoals: subgoal images handed to the servo, the goal included (0 without a servo).
+        subgoals_used: distinct subgoals the servo planned for.
+    """
+
+    final_error: float
+    steps: int
+    subgoals: int = 0
+    subgoals_used: int = 0
+
+
+class Controller(Protocol):
+    def run(self, env: Any, task: PlanningTask, servo: ServoParams, rng: np.random.Generator) -> Outcome:
+        """Play ``task`` in ``env``, which :func:`keyin.planning.tasks.start_task` has reset to it."""
+        ...
+
+
+@dataclass(frozen=True)
+class Hierarchical:
+    """Subgoals from a high-level planner, then the servo through them and the goal."""
+
+    subgoals: SubgoalPlanner
+
+    def run(self, env: Any, task: PlanningTask, servo: ServoParams, rng: np.random.Generator) -> Outcome:
+        intermediate = self.subgoals(task.start_image, task.goal_image, task, rng)
+        images = np.concatenate([intermediate, task.goal_image[None]])
+        result = run_servo(env, subgoal_pixels(images), servo, rng)
+        return Outcome(result.final_error, len(result.subgoal), len(images), len(np.unique(result.subgoal)))
+
+
+class StayPut:
+    """*Initial*: nothing moves."""
+
+    def run(self, env: Any, task: PlanningTask, servo: ServoParams, rng: np.random.Generator) -> Outcome:
+        return Outcome(env.task.goal_distance(env.physics), steps=0)
+
+
+class RandomActions:
+    """*Random*: uniform random actions, no planning."""
+
+    def run(self, env: Any, task: PlanningTask, servo: ServoParams, rng: np.random.Generator) -> Outcome:
+        steps = 0
+        for action in rng.uniform(-servo.max_action, servo.max_action, (servo.max_timesteps, 2)):
+            steps += 1
+            if execute(env, action, servo.action_repeat):
+                break
+        return Outcome(env.task.goal_distance(env.physics), steps)

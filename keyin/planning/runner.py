@@ -1,0 +1,114 @@
+"""Play many planning tasks with one controller: in this process or in spawn workers, resumable
+through the run dir's ``tasks.jsonl`` (:mod:`keyin.planning.journal`), with a progress bar.
+
+Task ``i`` draws its randomness from ``default_rng([seed, i])``, so a task's result does not
+depend on the worker count or on which run finished it. Only this process writes the journal, a
+line per task as soon as it is finished (workers return their records).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from keyin.data.generate import exit_with_parent
+from keyin.data.pushing import PushingGenerator
+from keyin.eval.planning import successes
+from keyin.planning.controllers import Controller
+from keyin.planning.journal import append_record, read_journal
+from keyin.planning.servo import ServoParams
+from keyin.planning.tasks import PlanningTask, start_task
+
+
+@dataclass(frozen=True)
+class PlanJob:
+    """Everything a worker needs besides the task (plain picklable objects)."""
+
+    planner: str
+    controller: Controller
+    servo: ServoParams
+    generator: PushingGenerator  # its environment reproduces the tasks' scene
+    seed: int
+    threshold: float
+
+
+def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
+    """Play one task; its journal record."""
+    env = job.generator.environment()
+    start = time.perf_counter()
+    start_task(env, task)
+    outcome = job.controller.run(env, task, job.servo, np.random.default_rng([job.seed, task.index]))
+    return {
+        "task": task.index,
+        "planner": job.planner,
+        "seed": job.seed,
+        "final_error": outcome.final_error,
+        "initial_distance": task.initial_distance,
+        "success": bool(successes(np.array([outcome.final_error]), job.threshold)[0]),
+        "steps": outcome.steps,
+        "subgoals": outcome.subgoals,
+        "subgoals_used": outcome.subgoals_used,
+        "seconds": time.perf_counter() - start,
+    }
+
+
+def run_tasks(
+    job: PlanJob, tasks: Sequence[PlanningTask], journal: Path, workers: int = 1, progress: bool = True
+) -> tuple[list[dict[str, Any]], dict[str, int]]:
+    """Play every task the journal does not hold yet.
+
+    Returns:
+        the records of ``tasks`` in their order; counts of tasks ``skipped`` (finished earlier),
+        ``played`` now and ``partial_lines_dropped`` (0 or 1, a killed run's last line).
+    """
+    earlier, dropped = read_journal(journal)
+    wanted = {task.index for task in tasks}
+    records = {record["task"]: record for record in earlier if record.get("task") in wanted}
+    todo = [task for task in tasks if task.index not in records]
+    columns = (
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total} tasks"),
+        TextColumn("success {task.fields[success]:.0%}, error {task.fields[error]:.2f}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+
+    def stats() -> dict[str, float]:
+        errors = np.array([record["final_error"] for record in records.values()])
+        if not len(errors):
+            return {"success": 0.0, "error": float("nan")}
+        return {"success": float(successes(errors, job.threshold).mean()), "error": float(errors.mean())}
+
+    with Progress(*columns, disable=not progress) as bar:
+        handle = bar.add_task(f"{job.planner} -> {journal}", total=len(tasks), completed=len(records), **stats())
+
+        def finished(record: dict[str, Any]) -> None:
+            append_record(journal, record)
+            records[record["task"]] = record
+            bar.update(handle, advance=1, **stats())
+
+        if workers <= 1 or len(todo) <= 1:
+            for task in todo:
+                finished(play(job, task))
+        else:
+            # spawn: MuJoCo with EGL can hang in a forked child (docs/pushing.md).
+            context = multiprocessing.get_context("spawn")
+            pool = ProcessPoolExecutor(
+                min(workers, len(todo)), mp_context=context, initializer=exit_with_parent, initargs=(os.getpid(),)
+            )
+            try:
+                for future in as_completed([pool.submit(play, job, task) for task in todo]):
+                    finished(future.result())
+            finally:  # on an error, do not wait for the tasks not started yet
+                pool.shutdown(cancel_futures=True)
+    counts = {"skipped": len(tasks) - len(todo), "played": len(todo), "partial_lines_dropped": int(dropped)}
+    return [records[task.index] for task in tasks], counts

@@ -1,0 +1,49 @@
+"""High-level planners: the subgoal images a task's servo works through (paper Table 2).
+
+A high-level planner is a callable ``(start_image, goal_image, task, rng) -> (K, H, W, 3)`` uint8
+intermediate subgoal images, K >= 0, in the order they are to be reached; the runner appends the
+goal image as the last subgoal, so every planner ends at the true goal (REFERENCE §7.1-7.2:
+No-subgoal = ``[goal]``, TAP = ``[TAP(start, goal), goal]``, KEYIN = ``[K^1..K^L, goal]``). The
+learned ones (KEYIN, Jumpy, Surprise, TAP) plug in here once the pushing models are trained.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from keyin.errors import DatasetFormatError
+from keyin.planning.tasks import PlanningTask
+
+
+class SubgoalPlanner(Protocol):
+    def __call__(
+        self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
+    ) -> np.ndarray:
+        """(H, W, 3) start and goal images -> (K, H, W, 3) intermediate subgoal images."""
+        ...
+
+
+class NoSubgoals:
+    """The paper's *No subgoals* row: the goal image is the only subgoal."""
+
+    def __call__(
+        self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
+    ) -> np.ndarray:
+        return np.empty((0, *goal.shape), goal.dtype)
+
+
+class DemoSubgoals:
+    """Oracle (not in the paper): the demonstration's own keyframes, the puck at the end of each push,
+    i.e. what a perfect keyframe predictor would propose."""
+
+    def __call__(
+        self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
+    ) -> np.ndarray:
+        if task.subgoal_frames is None:
+            raise DatasetFormatError(
+                "the planning tasks have no subgoal_frames (written by an older keyin); regenerate them "
+                "with keyin-generate dataset=pushing 'splits={planning: 240}' into a new data_dir"
+            )
+        return task.subgoal_frames

@@ -1,0 +1,90 @@
+"""keyin-plan end to end on three planning tasks with tiny budgets: the planners, resuming, errors."""
+
+import json
+
+import numpy as np
+import pytest
+
+from keyin.data.hdf5 import load_arrays, split_files
+from tests.cli.runner import error_line, last_json, run
+
+TINY = ("planner.servo_samples=16", "planner.elites=4", "planner.cem_iterations=1", "planner.max_timesteps=3",
+        "progress=false")
+
+
+@pytest.fixture(scope="module")
+def root(tmp_path_factory):
+    root = tmp_path_factory.mktemp("plan")
+    result = run("generate", "dataset=pushing", "splits={planning: 3}", "progress=false", cwd=root)
+    assert result.returncode == 0, result.stderr
+    return root
+
+
+def journal(folder):
+    return [json.loads(line) for line in (folder / "tasks.jsonl").read_text().splitlines()]
+
+
+def test_initial_reproduces_each_tasks_initial_distance(root):
+    result = run("plan", "planner=initial", "hydra.run.dir=initial", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr
+    expected = load_arrays(split_files(root / "data" / "pushing", "planning")[0])["initial_distance"]
+    records = journal(root / "initial")
+    assert [r["task"] for r in records] == [0, 1, 2]
+    np.testing.assert_allclose([r["final_error"] for r in records], expected, rtol=0, atol=1e-12)
+    metrics = last_json(result.stdout)
+    assert metrics["n_tasks"] == 3 and metrics["steps_mean"] == 0 and metrics["relative_error_mean"] == pytest.approx(1)
+    assert metrics["position_error_mean"] == pytest.approx(expected.mean()) and metrics["success_rate"] == 0.0
+    assert json.loads((root / "initial" / "metrics.json").read_text()) == metrics
+
+
+@pytest.mark.parametrize("planner,subgoals", [("random", 0), ("no_subgoals", 1), ("demo_subgoals", 7)])
+def test_planners_run_end_to_end(root, planner, subgoals):
+    result = run("plan", f"planner={planner}", f"hydra.run.dir={planner}", "tasks=2", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr
+    metrics = last_json(result.stdout)
+    assert metrics["planner"] == planner and metrics["n_tasks"] == 2 and metrics["success_threshold"] == 0.66
+    for record in journal(root / planner):
+        assert record["planner"] == planner and record["steps"] == 3 and record["subgoals"] == subgoals
+        assert 0 <= record["final_error"] < 2 and record["success"] == (record["final_error"] <= 0.66)
+
+
+def test_a_resumed_run_redoes_no_finished_task_and_drops_a_partial_line(root):
+    first = run("plan", "planner=random", "hydra.run.dir=resumed", "tasks=2", *TINY, cwd=root)
+    assert first.returncode == 0, first.stderr
+    path = root / "resumed" / "tasks.jsonl"
+    records = journal(root / "resumed")
+    records[0]["final_error"] = 0.5  # a redone task would get its true error back
+    path.write_text("".join(json.dumps(r) + "\n" for r in records) + '{"task": 2, "final_err')  # killed mid-line
+    again = run("plan", "planner=random", "resume=resumed", *TINY, cwd=root)
+    assert again.returncode == 0, again.stderr
+    metrics = last_json(again.stdout)
+    assert (metrics["skipped"], metrics["played"], metrics["partial_lines_dropped"]) == (2, 1, 1)
+    assert "2 of 3 tasks finished earlier" in again.stdout
+    resumed = journal(root / "resumed")
+    assert [r["task"] for r in resumed] == [0, 1, 2] and resumed[:2] == records
+    assert metrics["success_rate"] == pytest.approx(1 / 3)  # the fabricated 0.5 counts
+
+
+def test_workers_give_the_same_results(root):
+    for folder, workers in (("two_workers", 2), ("one_worker", 1)):
+        result = run("plan", "planner=random", f"hydra.run.dir={folder}", f"workers={workers}", *TINY, cwd=root)
+        assert result.returncode == 0, result.stderr
+        assert last_json(result.stdout)["n_tasks"] == 3
+    key = lambda r: (r["task"], r["final_error"], r["steps"])  # noqa: E731
+    assert sorted(map(key, journal(root / "two_workers"))) == sorted(map(key, journal(root / "one_worker")))
+
+
+def test_resuming_with_other_settings_is_refused(root):
+    assert run("plan", "planner=initial", "hydra.run.dir=settings", "tasks=1", *TINY, cwd=root).returncode == 0
+    line = error_line(run("plan", "planner=initial", "resume=settings", "success_threshold=0.5", *TINY, cwd=root))
+    assert "other settings: success_threshold=0.66 (now 0.5)" in line and "new run dir" in line
+
+
+@pytest.mark.parametrize("overrides,message", [
+    (("planner=keyin",), "planner=keyin needs its trained pushing model"),
+    (("success_threshold=0",), "success_threshold=0 must be a positive number"),
+    (("tasks=0",), "tasks=0 must be a positive integer"),
+    (("data_dir=elsewhere",), "splits={planning: 240}"),
+])
+def test_bad_inputs_give_one_error_line(root, overrides, message):
+    assert message in error_line(run("plan", *overrides, "hydra.run.dir=bad", cwd=root))

@@ -1,0 +1,73 @@
+"""keyin-report's Table 2 on a fabricated keyin-plan sweep folder."""
+
+import json
+
+import numpy as np
+import pytest
+
+from keyin.cli import report
+from keyin.eval.planning import planning_summary, success_curve
+from keyin.eval.planning_report import collect_planning, planning_csv, planning_markdown, summarise_planning
+
+
+def write_job(root, planner, seed, errors, threshold=0.66, extra_lines=""):
+    job = root / f"{planner}_seed{seed}"
+    job.mkdir(parents=True)
+    records = [dict(task=i, planner=planner, seed=seed, final_error=e, initial_distance=1.25, steps=10, subgoals=1,
+                    subgoals_used=1, success=e <= threshold, seconds=1.0) for i, e in enumerate(errors)]
+    (job / "tasks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in reversed(records)) + extra_lines)
+    metrics = dict(planning_summary(np.array(errors), np.full(len(errors), 1.25), threshold), planner=planner,
+                   seed=seed, dataset="pushing", success_threshold=threshold)
+    (job / "metrics.json").write_text(json.dumps(metrics))
+
+
+@pytest.fixture
+def sweep(tmp_path):
+    write_job(tmp_path, "no_subgoals", 0, [0.2, 1.0])
+    write_job(tmp_path, "no_subgoals", 1, [0.6, 1.2])
+    write_job(tmp_path, "demo_subgoals", 0, [0.1, 0.1])
+    write_job(tmp_path, "initial", 0, [1.25, 1.25], extra_lines='{"task": 9, "final')  # a later run, killed
+    return tmp_path
+
+
+def test_metrics_and_the_curve():
+    errors = np.array([0.2, 0.66, 1.0, 1.3])
+    np.testing.assert_allclose(success_curve(errors, np.array([0.0, 0.66, 2.0])), [0.0, 0.5, 1.0])
+    summary = planning_summary(errors, np.full(4, 1.3), 0.66)
+    assert summary["success_rate"] == 0.5 and summary["position_error_std"] == pytest.approx(errors.std())
+    assert summary["relative_error_mean"] == pytest.approx(errors.mean() / 1.3) and summary["n_tasks"] == 4
+
+
+def test_rows_pool_the_tasks_of_every_seed_in_the_papers_order(sweep):
+    rows = summarise_planning(collect_planning(sweep), 0.66)
+    assert [row.planner for row in rows] == ["initial", "no_subgoals", "demo_subgoals"]
+    no_subgoals = rows[1]
+    assert no_subgoals.seeds == [0, 1] and no_subgoals.summary["n_tasks"] == 4
+    assert no_subgoals.summary["position_error_mean"] == pytest.approx(0.75)
+    assert no_subgoals.summary["success_rate"] == 0.5 and no_subgoals.paper == (0.90, 0.14, 15.0)
+    markdown = planning_markdown(rows, 0.66)
+    assert "| initial | 1.25 ± 0.00 | 1.32 ± 0.06 | 0.0 % | – |" in markdown
+    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 50.0 % | 15.0 % | 0.60 | 10.0 | 4 | 0 1 |" in markdown
+    assert "| demo_subgoals | 0.10 ± 0.00 | – | 100.0 % | – |" in markdown
+    lines = planning_csv(rows, 0.66).splitlines()
+    assert len(lines) == 4 and lines[0].startswith("planner,seeds,n_tasks,success_threshold,position_error_mean")
+    assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.9,0.14,15.0")
+
+
+def test_the_report_writes_table_2_and_the_curve(sweep, capsys):
+    report.main([str(sweep)])
+    assert "| no_subgoals | 0.75 ± 0.38 |" in (sweep / "report" / "table2.md").read_text()
+    assert (sweep / "report" / "table2.csv").is_file() and (sweep / "report" / "table2_success.png").stat().st_size > 0
+    assert not (sweep / "report" / "table1.md").exists()
+    report.main([str(sweep), "--threshold", "1.1", "--out", str(sweep / "loose")])
+    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 75.0 % |" in (sweep / "loose" / "table2.md").read_text()
+
+
+def test_mixed_thresholds_and_a_planner_seed_twice_are_refused(sweep, capsys):
+    write_job(sweep / "other", "random", 0, [1.0], threshold=0.5)
+    with pytest.raises(SystemExit):
+        report.main([str(sweep)])
+    assert "different success thresholds [0.5, 0.66]; choose one with --threshold" in capsys.readouterr().err
+    write_job(sweep / "again", "initial", 0, [1.0])
+    with pytest.raises(ValueError, match="planner initial with seed 0 appears twice"):
+        summarise_planning(collect_planning(sweep), 0.66)

@@ -1,0 +1,32 @@
+"""tasks.jsonl and plan.json: whole lines only, a killed writer's partial line dropped, settings kept."""
+
+import json
+
+import pytest
+
+from keyin.errors import ConfigError, DatasetFormatError
+from keyin.planning.journal import append_record, claim_run_dir, read_journal
+
+
+def test_records_round_trip_and_a_partial_last_line_is_dropped_from_the_file(tmp_path):
+    path = tmp_path / "tasks.jsonl"
+    assert read_journal(path) == ([], False)
+    append_record(path, {"task": 0, "final_error": 0.5})
+    with open(path, "a") as handle:
+        handle.write('{"task": 1, "fin')  # killed mid-write
+    assert read_journal(path) == ([{"task": 0, "final_error": 0.5}], True)
+    assert path.read_text() == '{"final_error": 0.5, "task": 0}\n'
+    append_record(path, {"task": 1})
+    assert read_journal(path) == ([{"task": 0, "final_error": 0.5}, {"task": 1}], False)
+    path.write_text('{"task": 0}\nnot json\n')
+    with pytest.raises(DatasetFormatError, match="line 2 is not a JSON object"):
+        read_journal(path)
+
+
+def test_a_run_dir_keeps_its_settings(tmp_path):
+    settings = {"planner": {"name": "random", "max_timesteps": 3}, "seed": 0}
+    claim_run_dir(tmp_path, settings)
+    claim_run_dir(tmp_path, settings)
+    assert json.loads((tmp_path / "plan.json").read_text()) == settings
+    with pytest.raises(ConfigError, match=r"planner.max_timesteps=3 \(now 4\), seed=0 \(now None\)"):
+        claim_run_dir(tmp_path, {"planner": {"name": "random", "max_timesteps": 4}})
