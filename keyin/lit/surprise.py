@@ -21,6 +21,13 @@ from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models import ConvDecoder, ConvEncoder, SVGCore
 
 
+def kl_schedule(step: int, beta: float, warmup: int, delay: int) -> float:
+    """KL weight at ``step``: 0 for ``delay`` steps, then rising linearly to ``beta`` over ``warmup``."""
+    if step < delay:
+        return 0.0
+    return beta * (min(1.0, (step - delay) / warmup) if warmup > 0 else 1.0)
+
+
 class SurpriseModule(L.LightningModule):
     """SVG-FP with KEYIN's encoder/decoder sizes; ``discover`` picks the M largest KL peaks.
 
@@ -35,6 +42,8 @@ class SurpriseModule(L.LightningModule):
         beta_warmup: steps over which the KL weight rises linearly from 0 to ``beta`` (0: none).
             Starting at ``beta`` the posterior collapses before the predictor can use it
             (docs/baselines.md); a warm-up lets it carry information first.
+        beta_delay: steps at KL weight 0 before the warm-up starts (the decoder learns to draw
+            first; even a small weight can collapse the posterior while it cannot).
     """
 
     stage = "surprise"
@@ -59,6 +68,7 @@ class SurpriseModule(L.LightningModule):
         shift: int = -1,
         ae_weight: float = 0.0,
         beta_warmup: int = 0,
+        beta_delay: int = 0,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -96,10 +106,9 @@ class SurpriseModule(L.LightningModule):
         return bce * valid, kl * valid, valid, autoencoding
 
     def kl_weight(self) -> float:
-        """The KL weight at the current step: ``beta``, reached linearly over ``beta_warmup`` steps."""
-        warmup = self.hparams.beta_warmup
-        ramp = min(1.0, self.global_step / warmup) if warmup > 0 else 1.0
-        return self.hparams.beta * ramp
+        """The KL weight at the current training step (:func:`kl_schedule`)."""
+        hp = self.hparams
+        return kl_schedule(self.global_step, hp.beta, hp.beta_warmup, hp.beta_delay)
 
     def _log_terms(
         self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor, autoencoding: torch.Tensor

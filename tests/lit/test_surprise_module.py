@@ -3,7 +3,7 @@
 import torch
 
 from keyin.eval.surprise import surprise_keyframes
-from keyin.lit.surprise import SurpriseModule
+from keyin.lit.surprise import SurpriseModule, kl_schedule
 
 
 def module() -> SurpriseModule:
@@ -40,3 +40,10 @@ def test_discovery_is_the_peak_picking_of_the_posterior_kl():
     found = model.discoverers("surprise")["surprise_shift0"](frames, lengths)
     assert found == surprise_keyframes(kl, lengths, 2, 3, shift=0)
     assert all(len(row) == 3 and all(0 <= p < n for p in row) for row, n in zip(found, lengths.tolist()))
+
+
+
+def test_the_kl_weight_waits_then_rises_linearly_to_beta():
+    weights = [kl_schedule(step, beta=2.0, warmup=100, delay=50) for step in (0, 49, 50, 100, 150, 400)]
+    assert weights == [0.0, 0.0, 0.0, 1.0, 2.0, 2.0]
+    assert [kl_schedule(step, beta=2.0, warmup=0, delay=0) for step in (0, 7)] == [2.0, 2.0]
