@@ -1,7 +1,15 @@
 """Sweeps through Hydra's launcher plugins: joblib (local processes) and submitit's local executor
-(the SLURM code path on this machine). Untrained baselines keep each job to a few seconds."""
+(the SLURM code path on this machine). Untrained baselines keep each job to a few seconds.
+
+The sweeps run as a real ``keyin-train`` process, not in-process like the other CLI tests: the
+launchers set up logging handlers on the streams they find, and in-process those are pytest's
+redirected ones, closed once the command returns (a later log line then kills the test session).
+"""
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -24,8 +32,9 @@ def test_set(tmp_path_factory):
 ])
 def test_a_sweep_runs_every_job_through_the_launcher(test_set, launcher):
     sweep = f"sweep_{launcher[0].split('=')[1]}"
-    result = run("train", "-m", "model=random,constant", "seed=0,1", *launcher, f"hydra.sweep.dir={sweep}",
-                 cwd=test_set)
+    command = [str(Path(sys.executable).parent / "keyin-train"), "-m", "model=random,constant", "seed=0,1",
+               *launcher, f"hydra.sweep.dir={sweep}"]
+    result = subprocess.run(command, cwd=test_set, capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
     jobs = sorted((test_set / sweep).glob("*/metrics.json"))
     assert len(jobs) == 4
