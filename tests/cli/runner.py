@@ -16,6 +16,7 @@ import importlib
 import io
 import json
 import os
+import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,6 +49,14 @@ def run(module: str, *overrides: str, cwd: Path) -> Result:
         os.chdir(previous_dir)
         sys.argv = previous_argv
     return Result(returncode, stdout.getvalue(), stderr.getvalue())
+
+
+def run_process(module: str, *overrides: str, cwd: Path, timeout: float = 600) -> Result:
+    """``keyin-<module> overrides...`` as its own process (the console script next to this Python),
+    for commands whose launchers or loggers wrap the process's streams."""
+    script = Path(sys.executable).parent / f"keyin-{module}"
+    done = subprocess.run([str(script), *overrides], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    return Result(done.returncode, done.stdout, done.stderr)
 
 
 def last_json(stdout: str) -> dict:

@@ -1,13 +1,10 @@
 """Every console script end to end (tiny), and bad inputs giving one clear error line."""
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from tests.cli.runner import last_json, run
+from tests.cli.runner import last_json, run, run_process
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +46,6 @@ def test_eval_reads_any_file_given_by_path(brownian_test_set):
 
 
 def test_console_scripts_are_installed_next_to_the_interpreter(tmp_path):
-    script = Path(sys.executable).parent / "keyin-plan"
-    result = subprocess.run([str(script), "planner=keyin"], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    result = run_process("plan", "planner=keyin", cwd=tmp_path, timeout=60)
     assert result.returncode == 2 and "error: planner=keyin needs its trained pushing model" in result.stderr
 

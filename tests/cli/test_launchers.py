@@ -7,13 +7,10 @@ redirected ones, closed once the command returns (a later log line then kills th
 """
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from tests.cli.runner import run
+from tests.cli.runner import run, run_process
 
 pytest.importorskip("hydra_plugins.hydra_joblib_launcher")
 pytest.importorskip("hydra_plugins.hydra_submitit_launcher")
@@ -32,9 +29,8 @@ def test_set(tmp_path_factory):
 ])
 def test_a_sweep_runs_every_job_through_the_launcher(test_set, launcher):
     sweep = f"sweep_{launcher[0].split('=')[1]}"
-    command = [str(Path(sys.executable).parent / "keyin-train"), "-m", "model=random,constant", "seed=0,1",
-               *launcher, f"hydra.sweep.dir={sweep}"]
-    result = subprocess.run(command, cwd=test_set, capture_output=True, text=True, timeout=600)
+    result = run_process("train", "-m", "model=random,constant", "seed=0,1", *launcher, f"hydra.sweep.dir={sweep}",
+                         cwd=test_set)
     assert result.returncode == 0, result.stderr[-3000:]
     jobs = sorted((test_set / sweep).glob("*/metrics.json"))
     assert len(jobs) == 4

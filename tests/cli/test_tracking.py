@@ -4,14 +4,10 @@ The sweep runs as a real ``keyin-train`` process: wandb wraps the process's stdo
 console log, which in-process would be pytest's redirected streams.
 """
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
 from keyin.cli.tracking import job_label, sweep_group, wandb_logged_in
-from tests.cli.runner import run
+from tests.cli.runner import run, run_process
 
 wandb = pytest.importorskip("wandb")
 
@@ -36,9 +32,8 @@ def test_a_wandb_sweep_makes_one_offline_run_per_job(tmp_path, monkeypatch):
     monkeypatch.setenv("NETRC", str(tmp_path / "no-netrc"))
     monkeypatch.setenv("WANDB_SILENT", "true")
     assert run("generate", "splits={test: 4}", "progress=false", cwd=tmp_path).returncode == 0
-    command = [str(Path(sys.executable).parent / "keyin-train"), "-m", "model=surprise", "scale=smoke", "logger=wandb",
-               "seed=0,1", "num_workers=0", "trainer.enable_progress_bar=false", "hydra.sweep.dir=sweep"]
-    result = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    result = run_process("train", "-m", "model=surprise", "scale=smoke", "logger=wandb", "seed=0,1", "num_workers=0",
+                         "trainer.enable_progress_bar=false", "hydra.sweep.dir=sweep", cwd=tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     runs = sorted((tmp_path / "sweep").glob("*/wandb/offline-run-*"))
     assert len(runs) == 2, runs  # one run per job, not one run reused by the second job
