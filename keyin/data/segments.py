@@ -11,22 +11,25 @@ import torch
 
 
 def partition_segments(
-    batch: int, clip_length: int, offset_min: int, offset_max: int, generator: torch.Generator
+    lengths: torch.Tensor, offset_min: int, offset_max: int, generator: torch.Generator
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """Cut every clip into consecutive segments with offsets uniform in [offset_min, offset_max].
 
     Each clip starts its partition at a random frame in [0, offset_max) so that every frame is
-    an endpoint as often as any other; the partition stops before it would leave the clip.
+    an endpoint as often as any other; the partition stops before it would leave the clip's valid
+    frames (padding never enters a segment).
 
+    Args:
+        lengths: (B,) valid frames of each clip (conditioning + valid future frames).
     Returns:
         clip (R,), start (R,), offset (R,) int64 for the R segments of the whole batch.
     """
-    longest = clip_length // offset_min + 1
+    batch, longest = len(lengths), int(lengths.max()) // offset_min + 1
     offsets = torch.randint(offset_min, offset_max + 1, (batch, longest), generator=generator)
     first = torch.randint(0, offset_max, (batch, 1), generator=generator)
     ends = first + offsets.cumsum(dim=1)
     starts = ends - offsets
-    inside = ends <= clip_length - 1
+    inside = ends <= lengths.cpu()[:, None] - 1
     clip = torch.arange(batch)[:, None].expand_as(offsets)
     return clip[inside], starts[inside], offsets[inside]
 

@@ -125,21 +125,23 @@ class InterpolatorModule(L.LightningModule):
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         clips = batch["frames"]  # (B, L, C, H, W)
         n_clips, clip_length = clips.shape[:2]
+        lengths = self.hparams.n_cond + batch["future_length"]  # (B,) valid frames; the rest is padding
         embeddings = self.encoder(clips)  # (B, L, E)
         clip, start, offset = partition_segments(
-            n_clips, clip_length, self.hparams.offset_min, self.hparams.offset_max, self.segment_rng
+            lengths, self.hparams.offset_min, self.hparams.offset_max, self.segment_rng
         )
         bce, _, kl = self._segment_bce(clips, embeddings, clip, start, offset, "posterior")
         reconstruction = bce.sum() / n_clips
         kl_term = kl.sum() / n_clips
-        autoencoding = self._autoencoding_bce(clips.flatten(0, 1), embeddings.flatten(0, 1)) / n_clips
+        valid = torch.arange(clip_length, device=clips.device)[None] < lengths.to(clips.device)[:, None]
+        autoencoding = self._autoencoding_bce(clips[valid], embeddings[valid]) / n_clips
         loss = reconstruction + self.hparams.kl_weight * kl_term + self.hparams.ae_weight * autoencoding
         self.log_dict(
             {
                 "train/loss": loss,
                 "train/bce_per_frame": bce.sum() / (offset.sum() + 1e-9),
                 "train/kl_per_segment": kl.mean(),
-                "train/ae_per_frame": autoencoding / clip_length,
+                "train/ae_per_frame": autoencoding * n_clips / valid.sum(),
             },
             prog_bar=True,
         )
@@ -170,9 +172,12 @@ class InterpolatorModule(L.LightningModule):
         n_cond = self.hparams.n_cond
         keyframes = F.pad(batch["keyframes"][: len(clips)], (n_cond, 0))  # on the clip axis
         embeddings = self.encoder(clips)
+        last = n_cond - 1 + batch["future_length"][: len(clips)].cpu()  # (B,) last valid frame
         table = {}
         for offset in range(1, self.hparams.max_offset + 1):
             clip, start, offs = all_segments(len(clips), n_cond - 1, clips.shape[1] - 1, offset)
+            inside = start + offs <= last[clip]  # segments that reach into the padding are left out
+            clip, start, offs = clip[inside], start[inside], offs[inside]
             bce, count, _ = self._segment_bce(clips, embeddings, clip, start, offs, latent)
             bent = crosses_keyframe(keyframes.cpu(), clip, start, offs).to(bce.device)
             per_frame = bce / count

@@ -17,13 +17,20 @@ import torch.nn.functional as F
 
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.eval.segmentation import (
-    best_segmentation,
     boundary_keyframes,
+    decode_by_length,
     embedding_costs,
     map_keyframes,
     segmentation_offsets,
 )
-from keyin.losses.soft_keyframe import IGNORE_OFFSET, argmax_frames, argmax_positions, gaussian_kl, keyin_loss, offset_teacher_loss
+from keyin.losses.soft_keyframe import (
+    argmax_frames,
+    argmax_positions,
+    gaussian_kl,
+    keyin_loss,
+    offset_teacher_loss,
+    valid_frame_mask,
+)
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.models import KeyframePredictor
 
@@ -186,25 +193,27 @@ class KeyframeModule(L.LightningModule):
         the hard offsets that minimise the interpolation error between the true frames — the
         optimum the soft loss relaxes; with ``offset_evidence`` also a per-frame cross-entropy of
         the boundary scores to its boundaries. It keeps δ from collapsing to one offset for every
-        clip (docs/decisions.md). Computed on the first ``teacher_clips`` clips (0: all); clips shorter
-        than N get no target.
+        clip (docs/decisions.md). Computed on the first ``teacher_clips`` clips (0: all); each clip
+        is segmented within its own valid frames, and padding gets no boundary label.
         """
         n_clips = self.hparams.teacher_clips or out["boundary_emb"].shape[0]
         boundary_emb = out["boundary_emb"][:n_clips].detach()
-        costs = embedding_costs(self.interpolator, boundary_emb).cpu()
-        _, positions = best_segmentation(costs, self.hparams.n_keyframes, self.hparams.teacher_keyframe_cost)
+        lengths = future_length[:n_clips].cpu()
         n_future = boundary_emb.shape[1] - 1
-        full = future_length[:n_clips].cpu() == n_future
+        positions = decode_by_length(
+            lambda rows, length: embedding_costs(self.interpolator, boundary_emb[rows.to(boundary_emb.device), : length + 1]),
+            lengths, self.hparams.n_keyframes, self.predictor.max_offset, self.hparams.teacher_keyframe_cost,
+        )
         targets = segmentation_offsets(positions, n_future, self.hparams.n_keyframes)
-        targets[~full] = IGNORE_OFFSET
         loss = offset_teacher_loss(out["offset_logits"][:n_clips], targets.to(boundary_emb.device))
-        if out["boundary_scores"] is not None and bool(full.any()):
+        if out["boundary_scores"] is not None:
             # With offset evidence, the per-frame boundary scores learn the segmentation directly.
             labels = torch.zeros(n_clips, n_future)
             for row, clip_positions in enumerate(positions):
                 labels[row, clip_positions] = 1.0
-            scores = out["boundary_scores"][:n_clips][full.to(boundary_emb.device)]
-            loss = loss + F.binary_cross_entropy_with_logits(scores, labels[full].to(scores))
+            scores = out["boundary_scores"][:n_clips]
+            valid = valid_frame_mask(lengths, n_future).to(scores.device)  # padding gets no label
+            loss = loss + F.binary_cross_entropy_with_logits(scores[valid], labels.to(scores)[valid])
         return loss
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
