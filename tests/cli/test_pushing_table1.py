@@ -1,0 +1,49 @@
+"""The pushing Table 1 sweep end to end at scale=smoke on a tiny generated pushing dataset."""
+
+import json
+
+import pytest
+from hydra import compose, initialize_config_dir
+
+from keyin.cli import report
+from keyin.cli.app import CONFIG_DIR
+from tests.cli.runner import run
+
+TRAINED = ("keyin", "jumpy", "static", "surprise")
+SWEEP = ("-m", "experiment=pushing_table1", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
+         f"model={','.join(TRAINED)},constant", "seed=0")
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    root = tmp_path_factory.mktemp("pushing_table1")
+    generated = run("generate", "dataset=pushing", "splits={train: 6, val: 4, test: 4}", "shard_size=4",
+                    "progress=false", cwd=root)
+    assert generated.returncode == 0, generated.stderr
+    result = run("train", *SWEEP, "scale.batch_size=2", "scale.val_clips=2", cwd=root)
+    assert result.returncode == 0, result.stderr
+    return root / "runs" / "multirun" / "pushing_table1"
+
+
+def test_every_pushing_model_trains_and_scores_its_keyframes(sweep):
+    for name in (*TRAINED, "constant"):
+        metrics = json.loads((sweep / f"{name}_seed0" / "metrics.json").read_text())
+        assert metrics["method"] == name and metrics["dataset"] == "pushing" and metrics["n_sequences"] == 4
+        assert 0.0 <= metrics["f1"] <= 1.0
+    assert (sweep / "stage1_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
+    report.main([str(sweep), "--examples", "1"])
+    table = (sweep / "report" / "table1.md").read_text()
+    assert "| pushing | keyin |" in table and "| 0.30 |" in table  # the paper's pushing column beside ours
+
+
+@pytest.mark.parametrize(
+    ("scale", "expected"),
+    [("cpu", {"conv_width": 8, "batch_size": 16, "inter_offset_min": 1}),
+     ("paper", {"conv_width": 32, "batch_size": 30, "inter_offset_min": 2, "inter_offset_max": 6})],
+)
+def test_a_scale_preset_takes_its_pushing_values_only_on_pushing(scale, expected):
+    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+        pushing = compose("train", overrides=[f"scale={scale}", "experiment=pushing_table1"])
+        brownian = compose("train", overrides=[f"scale={scale}", "dataset=brownian"])
+    assert {key: pushing.scale[key] for key in expected} == expected
+    assert any(brownian.scale[key] != value for key, value in expected.items())
