@@ -1,0 +1,90 @@
+"""Choose discovery 'map''s keyframe price λ and boundary weight α on validation clips.
+
+    python benchmarks/choose_map_cost.py runs/<run>/checkpoints/keyframes/last.ckpt --clips 300 \
+        --costs 0 50 100 200 400 --weights 0 5 10 20 --out benchmarks/results/map_cost_<dataset>.md
+
+λ is in nats of the decoder's pixel BCE, so it depends on the frame size and content and is chosen
+again for each dataset (docs/decisions.md). The interpolation costs of every in-clip segment are
+computed once per clip length; each (λ, α) is then one exact DP per clip. Validation clips only:
+the test split stays for the reported F1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from datetime import date
+from pathlib import Path
+
+import torch
+from torch.utils.data import DataLoader, Subset
+
+from common import cpu_model, publish
+from keyin.data.clips import ShardClips
+from keyin.data.hdf5 import split_files
+from keyin.eval.f1 import keyframe_lists, keyframe_scores
+from keyin.eval.segmentation import boundary_segment_costs, decode_by_length, interpolation_costs
+from keyin.lit.checkpoints import load_trained_module
+
+
+@torch.no_grad()
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("ckpt", help="a stage-2 (keyframes) checkpoint")
+    parser.add_argument("--clips", type=int, default=300)
+    parser.add_argument("--split", default="val")
+    parser.add_argument("--data-dir", default="data")
+    parser.add_argument("--costs", type=float, nargs="+", default=[0, 50, 100, 200, 400])
+    parser.add_argument("--weights", type=float, nargs="+", default=[0, 5, 10, 20])
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args()
+    module, config = load_trained_module(args.ckpt, "keyframes")
+    dataset, stage1 = config["dataset"], module.hparams.stage1
+    image = (stage1["image_size"], stage1["image_size"], stage1["channels"])
+    clips = ShardClips(split_files(Path(args.data_dir) / dataset["name"], args.split), image, stage1["n_cond"], stage1["n_future"])
+    clips = Subset(clips, range(min(args.clips, len(clips))))
+    batch = next(iter(DataLoader(clips, batch_size=len(clips))))
+    started = time.perf_counter()
+    n_cond, lengths = stage1["n_cond"], batch["future_length"]
+    embeddings = module.encoder(batch["frames"])
+    keys = module.predictor(embeddings[:, :n_cond], embeddings[:, n_cond:], lengths, mode="posterior", sample=False)
+    boundary_emb, future = embeddings[:, n_cond - 1 :], batch["frames"][:, n_cond:].flatten(2)
+    pixel_costs = {  # per clip length: (clips of that length, their segment costs)
+        length: interpolation_costs(module.interpolator, module.decoder, boundary_emb[rows, : length + 1], future[rows, :length])
+        for length in lengths.unique().tolist()
+        for rows in [(lengths == length).nonzero().flatten()]
+    }
+    seconds = time.perf_counter() - started
+    max_offset, n_keys = module.predictor.max_offset, module.hparams.n_keyframes
+    rows = [f"| λ (nats) | α | F1 | ±1 F1 | precision | recall | keyframes/clip |", "|---|---|---|---|---|---|---|"]
+    for cost in args.costs:
+        for weight in args.weights:
+            scores = keys.boundary_scores
+            if weight and scores is None:
+                continue
+
+            def segment_costs(clip_rows: torch.Tensor, length: int) -> torch.Tensor:
+                total = pixel_costs[length]
+                if weight:
+                    total = total + weight * boundary_segment_costs(scores[clip_rows, :length].float(), max_offset)
+                return total
+
+            predicted = decode_by_length(segment_costs, lengths, n_keys, max_offset, cost)
+            s = keyframe_scores(predicted, keyframe_lists(batch["keyframes"]), stage1["n_future"])
+            per_clip = sum(map(len, predicted)) / len(predicted)
+            rows.append(f"| {cost:g} | {weight:g} | {s['f1']:.3f} | {s['f1_tol1']:.3f} | {s['precision']:.3f} | "
+                        f"{s['recall']:.3f} | {per_clip:.2f} |")
+    true_per_clip = batch["keyframes"].sum().item() / len(clips)
+    report = "\n".join([
+        f"## Discovery 'map': keyframe price λ and boundary weight α on {len(clips)} {args.split} clips ({dataset['name']})\n",
+        f"- command: `python benchmarks/choose_map_cost.py {args.ckpt} --clips {args.clips} --split {args.split} --costs "
+        f"{' '.join(f'{c:g}' for c in args.costs)} --weights {' '.join(f'{w:g}' for w in args.weights)}`",
+        f"- machine: {cpu_model()}, {torch.get_num_threads()} threads, torch {torch.__version__}, {date.today()}; "
+        f"segment costs in {seconds:.0f} s; {true_per_clip:.2f} true keyframes per clip\n",
+        *rows,
+    ])
+    publish(report, args.out)
+
+
+if __name__ == "__main__":
+    main()
