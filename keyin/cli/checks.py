@@ -53,7 +53,10 @@ def check_common(cfg: Mapping[str, Any]) -> None:
 
 
 STAGES = ("both", "interpolator", "keyframes")
-SCALE_COUNTS = ("batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "val_every", "checkpoint_every", "val_clips", "eval_clips")
+SCALE_COUNTS = (
+    "batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "tap_steps", "val_every",
+    "checkpoint_every", "val_clips", "eval_clips",
+)
 
 
 def check_training(cfg: Mapping[str, Any]) -> None:

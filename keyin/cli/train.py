@@ -1,6 +1,6 @@
-"""keyin-train experiment=<name>: train the chosen model (KEYIN's two stages, or Surprise's one),
-then score its keyframes on the test split. Untrained baselines (Random, Constant) are only scored,
-so one sweep covers every row of Table 1.
+"""keyin-train experiment=<name>: train the chosen model (KEYIN's two stages, or Surprise's or
+TAP's one), then score its keyframes on the test split (TAP, which finds none, scores itself).
+Untrained baselines (Random, Constant) are only scored, so one sweep covers every row of Table 1.
 """
 
 from __future__ import annotations
@@ -90,24 +90,34 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         config=OmegaConf.to_container(cfg, resolve=True),
         compile_networks=cfg.compile,
     )
+    module = None
     if not cfg.model.trainable:
         discoverers = {cfg.model.name: instantiate(cfg.model.discoverer)}
-    elif "module" in cfg.model:  # one stage (Surprise)
+    elif "module" in cfg.model:  # one stage (Surprise, TAP)
         module = instantiate(cfg.model.module)
         fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=cfg.model.steps, **common)
         discoverers = module.discoverers(cfg.model.name)
     else:
         discoverers = train_two_stages(cfg, datamodule, common, folder)
-    if not discoverers or not cfg.evaluate:
+    if not cfg.evaluate:
         return None
-    return evaluate_all(discoverers, clips("test", scale.eval_clips), cfg, folder)
+    if discoverers:
+        return evaluate_all(discoverers, clips("test", scale.eval_clips), cfg, folder)
+    if hasattr(module, "test_metrics"):  # a model without keyframes scores itself (TAP)
+        metrics = module.test_metrics(clips("test", scale.eval_clips), folder)
+        return record_metrics(dict(metrics, method=cfg.model.name), cfg, folder)
+    return None
 
 
 def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: Path) -> dict:
     """Score every discoverer on the test clips and write metrics.json."""
     dataset = cfg.dataset
-    metrics = score_methods(discoverers, test_clips, dataset.n_cond, dataset.n_future, folder)
-    metrics.update(dataset=dataset.name, seed=cfg.seed, scale=config_choice("scale"))
+    return record_metrics(score_methods(discoverers, test_clips, dataset.n_cond, dataset.n_future, folder), cfg, folder)
+
+
+def record_metrics(metrics: dict, cfg: DictConfig, folder: Path) -> dict:
+    """Add the run's dataset, seed and scale to ``metrics`` and write metrics.json."""
+    metrics.update(dataset=cfg.dataset.name, seed=cfg.seed, scale=config_choice("scale"))
     write_metrics(metrics, folder)
     return metrics
 

@@ -57,16 +57,21 @@ def is_planning(metrics: dict[str, Any]) -> bool:
     return "planner" in metrics
 
 
+def is_subgoal_predictor(metrics: dict[str, Any]) -> bool:
+    """A job that predicts subgoal images and finds no keyframes (TAP): no row of Table 1."""
+    return "f1" not in metrics and "argmin_last" in metrics
+
+
 def collect_metrics(root: Path) -> list[dict[str, Any]]:
-    """Every keyframe job's metrics under ``root``, one record per method and variant (planning jobs
-    are left out).
+    """Every keyframe job's metrics under ``root``, one record per method and variant (planning and
+    subgoal-predictor jobs are left out).
 
     Raises:
         ValueError: if no metrics.json is found, or one lacks method/dataset/f1.
     """
     records = []
     for folder, metrics in read_metrics(root):
-        if is_planning(metrics):
+        if is_planning(metrics) or is_subgoal_predictor(metrics):
             continue
         missing = [key for key in ("method", "dataset", "f1") if key not in metrics]
         if missing:

@@ -29,11 +29,17 @@ class RunConfigInCheckpoint(L.Callback):
         checkpoint[STAGE_KEY] = module.stage
 
 
+STAGE_CHECKPOINTS = {
+    "interpolator": "the stage-1 checkpoint (checkpoints/interpolator/last.ckpt)",
+    "keyframes": "a stage-2 checkpoint (checkpoints/keyframes/last.ckpt)",
+}
+
+
 def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any]:
     """Load a keyin checkpoint without running any pickled code (``weights_only=True``).
 
     Args:
-        stage: "interpolator" or "keyframes" to insist on; None accepts either.
+        stage: the stage to insist on ("interpolator", "keyframes", "surprise", "tap"); None accepts any.
     Raises:
         CheckpointError: missing file, unsafe or foreign content, or another stage.
     """
@@ -53,11 +59,7 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"
-            + (
-                "; pass the stage-1 checkpoint (checkpoints/interpolator/last.ckpt)"
-                if stage == "interpolator"
-                else "; pass a stage-2 checkpoint (checkpoints/keyframes/last.ckpt)"
-            )
+            + f"; pass {STAGE_CHECKPOINTS.get(stage, f'checkpoints/{stage}/last.ckpt of a {stage} run')}"
         )
     return checkpoint
 
@@ -112,9 +114,10 @@ def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tu
     from keyin.lit.interpolator import InterpolatorModule
     from keyin.lit.keyframes import KeyframeModule
     from keyin.lit.surprise import SurpriseModule
+    from keyin.lit.tap import TAPModule
 
     checkpoint = load_checkpoint(path, stage)
-    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule}
+    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule, "tap": TAPModule}
     module_class = stages[checkpoint[STAGE_KEY]]
     module = module_class(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])

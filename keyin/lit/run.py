@@ -15,7 +15,9 @@ from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, che
 from keyin.lit.pictures import ValidationPictures
 
 
-LEARNING_RATES = {"interpolator": "scale.lr_stage1", "keyframes": "scale.lr_stage2", "surprise": "scale.lr_surprise"}
+LEARNING_RATES = {
+    "interpolator": "scale.lr_stage1", "keyframes": "scale.lr_stage2", "surprise": "scale.lr_surprise", "tap": "scale.lr_tap",
+}
 
 
 class FiniteLoss(L.Callback):

@@ -6,6 +6,7 @@ from keyin.models.interpolator import Interpolator, InterpolatorPosterior
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
 from keyin.models.recurrent import MLP, LSTMBlock, LSTMState, state_from_vector
 from keyin.models.svg import SVGCore
+from keyin.models.tap import TAPNetwork
 
 __all__ = [
     "ConvDecoder",
@@ -18,6 +19,7 @@ __all__ = [
     "LSTMState",
     "MLP",
     "SVGCore",
+    "TAPNetwork",
     "attention_posterior",
     "state_from_vector",
 ]

@@ -22,6 +22,9 @@ def sweep(tmp_path):
               variants={"surprise_shift0": dict(f1=0.1, f1_tol1=0.3, precision=0.1, recall=0.1, n_predicted=6.0)})
     write_job(tmp_path, "random_seed0", "random", 0, 0.16)
     (tmp_path / "stage1_seed0").mkdir()  # a shared stage-1 dir holds no metrics
+    tap = tmp_path / "tap_seed0"  # a subgoal predictor beside the sweep has no keyframe F1
+    tap.mkdir()
+    (tap / "metrics.json").write_text(json.dumps(dict(method="tap", dataset="pushing", seed=0, argmin_last=0.4)))
     return tmp_path
 
 
