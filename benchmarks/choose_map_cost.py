@@ -23,7 +23,7 @@ from common import cpu_model, publish
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
-from keyin.eval.segmentation import boundary_segment_costs, decode_by_length, interpolation_costs
+from keyin.eval.segmentation import boundary_segment_costs, decode_by_length, interpolation_costs, with_sequence_ends
 from keyin.lit.checkpoints import load_trained_module
 
 
@@ -69,7 +69,8 @@ def main() -> None:
                     total = total + weight * boundary_segment_costs(scores[clip_rows, :length].float(), max_offset)
                 return total
 
-            predicted = decode_by_length(segment_costs, lengths, n_keys, max_offset, cost)
+            interior = decode_by_length(segment_costs, lengths, n_keys, max_offset, cost)
+            predicted = with_sequence_ends(interior, lengths, stage1["n_future"])  # as KeyframeModule.discover
             s = keyframe_scores(predicted, keyframe_lists(batch["keyframes"]), stage1["n_future"])
             per_clip = sum(map(len, predicted)) / len(predicted)
             rows.append(f"| {cost:g} | {weight:g} | {s['f1']:.3f} | {s['f1_tol1']:.3f} | {s['precision']:.3f} | "

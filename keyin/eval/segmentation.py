@@ -224,6 +224,25 @@ def decode_by_length(
     return positions
 
 
+def with_sequence_ends(positions: list[list[int]], lengths: Tensor, n_future: int) -> list[list[int]]:
+    """Add the last valid frame of every clip that ends inside the window as a keyframe.
+
+    A segmentation closes each clip at its last valid frame. Where the sequence ends before N
+    (a demonstration that finished: the rest is padding) that closing boundary is the end of the
+    last subgoal, a keyframe of the data; where the clip fills the window, the window cut the
+    sequence and its last frame is no event. Full-length datasets (Brownian) are unchanged.
+
+    Args:
+        positions: per clip, interior keyframe positions; lengths: (B,) valid future frames.
+    Returns:
+        Per clip, the positions with ``length - 1`` appended for clips with ``0 < length < n_future``.
+    """
+    return [
+        row + [length - 1] if 0 < length < n_future else row
+        for row, length in zip(positions, lengths.tolist())
+    ]
+
+
 @torch.no_grad()
 def map_keyframes(
     interpolator: torch.nn.Module,
@@ -303,20 +322,28 @@ class SegmentationDiscoverer:
 
     @torch.no_grad()
     def __call__(self, clips: Tensor, future_length: Tensor) -> list[list[int]]:
-        """Keyframe positions of (B, L, C, H, W) full-length clips."""
+        """Keyframe positions of (B, L, C, H, W) clips with (B,) valid future frames, each clip
+        segmented within its own frames (:func:`with_sequence_ends` adds the end of a sequence
+        that stops inside the window). ``last_costs`` keeps the (R, length, S) costs of the last
+        group of equally long clips (all clips, in order, when every clip is full)."""
         n_cond = self.stage1.hparams.n_cond
-        if bool((future_length < clips.shape[1] - n_cond).any()):
-            raise ValueError("SegmentationDiscoverer needs full-length clips")
         boundary_emb = self.stage1.encoder(clips)[:, n_cond - 1 :]  # (B, N + 1, E)
-        if self.space == "embeddings":
-            costs = embedding_costs(self.stage1.interpolator, boundary_emb)
-        else:
-            costs = interpolation_costs(
-                self.stage1.interpolator, self.stage1.decoder, boundary_emb, clips[:, n_cond:].flatten(2)
-            )
-        self.last_costs = costs
-        _, positions = best_segmentation(costs, self.n_keyframes)
-        return positions
+        frames = clips[:, n_cond:].flatten(2)
+
+        def segment_costs(rows: Tensor, length: int) -> Tensor:
+            rows = rows.to(boundary_emb.device)
+            if self.space == "embeddings":
+                costs = embedding_costs(self.stage1.interpolator, boundary_emb[rows, : length + 1])
+            else:
+                costs = interpolation_costs(
+                    self.stage1.interpolator, self.stage1.decoder, boundary_emb[rows, : length + 1], frames[rows, :length]
+                )
+            self.last_costs = costs
+            return costs
+
+        lengths = future_length.cpu()
+        positions = decode_by_length(segment_costs, lengths, self.n_keyframes, self.stage1.interpolator.max_offset)
+        return with_sequence_ends(positions, lengths, frames.shape[1])
 
 
 def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes: int) -> Tensor:

@@ -22,6 +22,7 @@ from keyin.eval.segmentation import (
     embedding_costs,
     map_keyframes,
     segmentation_offsets,
+    with_sequence_ends,
 )
 from keyin.losses.soft_keyframe import (
     argmax_frames,
@@ -251,15 +252,17 @@ class KeyframeModule(L.LightningModule):
         self.train(was_training)
         self.freeze_stage1()
         if discovery == "boundaries":
-            return boundary_keyframes(
+            interior = boundary_keyframes(
                 keys.boundary_scores, future_length.cpu(), self.hparams.n_keyframes, self.predictor.max_offset
             )
+            return with_sequence_ends(interior, future_length.cpu(), clips.shape[1] - n_cond)
         if discovery == "map":
-            return map_keyframes(
+            interior = map_keyframes(
                 self.interpolator, self.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2).to(self.device),
                 future_length, self.hparams.n_keyframes, self.hparams.map_keyframe_cost,
                 keys.boundary_scores, self.hparams.map_boundary_weight,
             )
+            return with_sequence_ends(interior, future_length.cpu(), clips.shape[1] - n_cond)
         positions = argmax_positions(keys.offset_probs).cpu()
         return [
             [p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())
@@ -286,7 +289,7 @@ class KeyframeModule(L.LightningModule):
         discovered = self.discover(clips[:count], lengths[:count])
         truth = keyframe_lists(batch["keyframes"][:count])
         sampled = argmax_positions(prior["offset_probs"]).tolist()
-        videos = [clips[:count], self._argmax_video(clips, posterior)[:count], self._argmax_video(clips[:count], prior)]
+        videos = [clips[:count], self.argmax_video(clips, posterior)[:count], self.argmax_video(clips[:count], prior)]
         return {
             "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
@@ -294,7 +297,7 @@ class KeyframeModule(L.LightningModule):
             "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
         }
 
-    def _argmax_video(self, clips: torch.Tensor, out: dict[str, torch.Tensor]) -> torch.Tensor:
+    def argmax_video(self, clips: torch.Tensor, out: dict[str, torch.Tensor]) -> torch.Tensor:
         """(B, L, C, H, W): the conditioning frames, then the frames of the argmax offsets."""
         n_cond = self.hparams.stage1["n_cond"]
         future = argmax_frames(out["offset_probs"], out["frames"], clips.shape[1] - n_cond)  # (B, N, D)

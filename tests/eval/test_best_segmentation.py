@@ -11,6 +11,8 @@ from keyin.eval.segmentation import (
     path_cost,
     segment_starts_offsets,
     segmentation_offsets,
+    with_sequence_ends,
+    SegmentationDiscoverer,
 )
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
@@ -184,3 +186,22 @@ def test_map_keyframes_close_each_clip_at_its_own_length():
     decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, torch.tensor([8, 5]), 4, 1.0)
     alone = map_keyframes(interpolator, decoder, boundary_emb[1:, :6], frames[1:, :5], torch.tensor([5]), 4, 1.0)
     assert decoded[1] == alone[0] and all(p < 4 for p in decoded[1])
+
+
+def test_a_sequence_that_ends_inside_the_window_ends_at_a_keyframe():
+    ends = with_sequence_ends([[2, 7], [2], [], []], torch.tensor([10, 5, 3, 0]), n_future=10)
+    assert ends == [[2, 7], [2, 4], [2], []]  # a full clip was cut by the window; an empty one has no end
+
+
+def test_segmentation_discoverer_segments_each_clip_within_its_own_frames():
+    from keyin.lit.interpolator import InterpolatorModule
+    from tests.lit.test_keyframe_teacher import STAGE1
+
+    torch.manual_seed(5)
+    stage1 = InterpolatorModule(**STAGE1)
+    clips = (torch.rand(2, 8, 1, 8, 8) > 0.7).float()
+    discover = SegmentationDiscoverer(stage1, n_keyframes=3)
+    both = discover(clips, torch.tensor([6, 4]))
+    alone = discover(clips[1:, :6], torch.tensor([4]))
+    assert both[1] == alone[0] + [3]  # the same interior keyframes, and the sequence's end inside the window
+    assert all(p < 5 for p in both[0])  # the full clip gets interior keyframes only

@@ -11,9 +11,12 @@ STAGE1 = dict(
 )
 
 
-def keyframe_module(teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets") -> KeyframeModule:
+def keyframe_module(
+    teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets", **sizes: int
+) -> KeyframeModule:
+    """A small stage-2 module; ``sizes`` override STAGE1's (e.g. image_size, channels)."""
     torch.manual_seed(0)
-    stage1 = dict(InterpolatorModule(**STAGE1).hparams)
+    stage1 = dict(InterpolatorModule(**{**STAGE1, **sizes}).hparams)
     module = KeyframeModule(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
@@ -68,11 +71,12 @@ def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored(
     assert list(module.discoverers("keyin")) == ["keyin", "keyin_offsets", "keyin_map"]
     data = batch()
     found = module.discover(data["frames"], data["future_length"])
-    assert found == [[2], [2], [2]]  # gaps ≤ S = 3 over 6 (or 4) frames force one interior keyframe
+    assert found == [[2], [2], [2, 3]]  # gaps ≤ S = 3 force one interior keyframe; the 4-frame clip ends at 3
     offsets = module.discoverers("keyin")["keyin_offsets"](data["frames"], data["future_length"])
     assert all(all(0 <= p < n for p in row) for row, n in zip(offsets, [6, 6, 4]))
     mapped = module.discover(data["frames"], data["future_length"], discovery="map")
-    assert all(all(0 <= p < n - 1 for p in row) for row, n in zip(mapped, [6, 6, 4]))
+    assert all(all(0 <= p < n - 1 for p in row) for row, n in zip(mapped[:2], [6, 6]))
+    assert mapped[2][-1] == 3 and all(0 <= p < 3 for p in mapped[2][:-1])
     assert list(keyframe_module(0.0).discoverers("jumpy")) == ["jumpy"]
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(0.0, discovery="boundaries")
