@@ -9,10 +9,16 @@ from keyin.errors import ConfigError
 DATASET_SIZES = ("image_size", "channels", "n_cond", "n_future", "n_keyframes", "max_offset")
 
 
-def require_positive_int(value: Any, key: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ConfigError(f"{key}={value!r} must be a positive integer")
+def require_int_at_least(value: Any, key: str, minimum: int) -> int:
+    """``value`` itself if it is an integer >= ``minimum`` (a bool is not one)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        allowed = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
+        raise ConfigError(f"{key}={value!r} must be {allowed}")
     return value
+
+
+def require_positive_int(value: Any, key: str) -> int:
+    return require_int_at_least(value, key, 1)
 
 
 def require_seed(value: Any, key: str = "seed") -> int:

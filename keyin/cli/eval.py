@@ -1,19 +1,22 @@
-"""keyin-eval model=random|constant dataset=<name> (or ckpt=<path>): keyframe F1 (paper Table 1)."""
+"""keyin-eval model=random|constant dataset=<name> (or ckpt=<path>): keyframe F1 (paper Table 1);
+with video_samples=k also video-prediction PSNR/SSIM of a stage-2 checkpoint (REFERENCE §5.4)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import torch
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
-from keyin.cli.checks import check_common, require_positive_int
+from keyin.cli.checks import check_common, require_int_at_least, require_positive_int
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
 from keyin.eval.discovery import score_methods
 from keyin.eval.segmentation import SegmentationDiscoverer
+from keyin.eval.video import evaluate_video, save_rollouts
 from keyin.lit.checkpoints import load_trained_module
 
 
@@ -23,12 +26,24 @@ def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:
     return split_files(Path(cfg.data_dir) / dataset_name, cfg.split)
 
 
+def check_video_samples(cfg: DictConfig, stage: str | None) -> None:
+    """``video_samples``: 0 (off), or a count of prior samples for a stage-2 checkpoint."""
+    require_int_at_least(cfg.video_samples, "video_samples", 0)
+    if cfg.video_samples and stage != "keyframes":
+        evaluated = f"ckpt= holds a '{stage}' checkpoint" if stage else "a baseline predicts no video"
+        raise ConfigError(
+            f"video_samples={cfg.video_samples} needs ckpt=<a keyin, jumpy or static run>/checkpoints/"
+            f"keyframes/last.ckpt (stage 2), but {evaluated}; drop video_samples="
+        )
+
+
 @user_errors
 def evaluate(cfg: DictConfig) -> dict:
     check_common(cfg)
     require_positive_int(cfg.batch_size, "batch_size")
     if cfg.ckpt is not None:
         module, trained = load_trained_module(cfg.ckpt, stage=None)
+        check_video_samples(cfg, module.stage)
         name = trained["model"]["name"]
         if module.stage == "interpolator":  # exact best segmentation under the interpolator
             n_keyframes = trained["dataset"]["n_keyframes"]
@@ -44,6 +59,7 @@ def evaluate(cfg: DictConfig) -> dict:
             f"with ckpt=<path>"
         )
     else:
+        check_video_samples(cfg, None)
         discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
     clips = ShardClips(
         eval_files(cfg, dataset.name),
@@ -51,10 +67,12 @@ def evaluate(cfg: DictConfig) -> dict:
         dataset.n_cond,
         dataset.n_future,
     )
-    metrics = score_methods(
-        discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(),
-        batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress,
-    )
+    loader = dict(batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress)
+    metrics = score_methods(discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), **loader)
+    if cfg.video_samples:
+        torch.manual_seed(cfg.seed)  # the prior samples
+        metrics["video"] = evaluate_video(module, clips, cfg.video_samples, **loader)
+        save_rollouts(module, clips, cfg.video_samples, run_dir())
     metrics.update(dataset=dataset.name, seed=cfg.seed)
     write_metrics(metrics, run_dir())
     return metrics

@@ -55,12 +55,16 @@ def save_keyframe_pictures(
     truth: Sequence[Sequence[int]],
     predicted: Sequence[Sequence[int]],
     name: str = "keyframes",
+    per_column: int = 1,
 ) -> tuple[Path, Path]:
-    """Write ``<name>.png`` (one row per clip, frames left to right) and ``<name>.gif`` (clips side by side).
+    """Write ``<name>.png`` (one row per clip, frames left to right) and ``<name>.gif`` (clips side by
+    side, or in columns of ``per_column``).
 
     Args:
         clips: (K, L, C, H, W) in [0, 1].
         truth, predicted: per clip, future keyframe indices.
+        per_column: the GIF stacks this many consecutive clips in each column (K divisible by it),
+            e.g. 3 for the truth, reconstruction and sample of one clip.
     Returns:
         The PNG and GIF paths.
     """
@@ -69,7 +73,8 @@ def save_keyframe_pictures(
     )  # (K, L, h, w, 3)
     n_clips, length, height, width, _ = rows.shape
     strip = rows.transpose(0, 2, 1, 3, 4).reshape(n_clips * height, length * width, 3)
-    movie = rows.transpose(1, 2, 0, 3, 4).reshape(length, height, n_clips * width, 3)
+    columns = rows.reshape(n_clips // per_column, per_column, length, height, width, 3)
+    movie = columns.transpose(2, 1, 3, 0, 4, 5).reshape(length, per_column * height, -1, 3)
     scale = max(1, 256 // height)
     movie = movie.repeat(scale, axis=1).repeat(scale, axis=2)
     folder = Path(folder)

@@ -3,6 +3,7 @@
 import json
 import shutil
 
+import imageio.v3 as iio
 import pytest
 import torch
 
@@ -102,6 +103,32 @@ def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
     metrics = last_json(result.stdout)
     assert metrics["method"] == "keyin_segmentation" and metrics["n_sequences"] == 8
     assert 0 < metrics["n_predicted"] <= 5  # at most M = 6 gaps, the last one closing the clip
+
+
+VIDEO_KEYS = {"psnr_best_of_k", "ssim_best_of_k", "psnr_mean", "ssim_mean", "psnr_posterior", "ssim_posterior", "k"}
+
+
+def test_eval_with_video_samples_adds_video_metrics_and_rollouts(trained):
+    root, metrics = trained
+    result = run("eval", "ckpt=run/checkpoints/keyframes/last.ckpt", "video_samples=2", "progress=false",
+                 "hydra.run.dir=video", cwd=root)
+    assert result.returncode == 0, result.stderr
+    evaluated = last_json(result.stdout)
+    assert evaluated["f1"] == metrics["f1"]
+    video = evaluated["video"]
+    assert set(video) == VIDEO_KEYS and video["k"] == 2
+    assert video["psnr_best_of_k"] >= video["psnr_mean"] and video["ssim_best_of_k"] >= video["ssim_mean"]
+    assert 0 < video["psnr_mean"] < 100 and -1 <= video["ssim_mean"] <= 1
+    assert json.loads((root / "video" / "metrics.json").read_text()) == evaluated
+    rollouts = iio.imread(root / "video" / "rollouts.png")
+    assert rollouts.shape[:2] == (3 * 4 * 36, 35 * 36)  # 4 clips x (truth, posterior, sample), 5 + 30 frames
+    assert (root / "video" / "rollouts.gif").is_file()
+
+
+def test_video_samples_of_a_stage1_checkpoint_give_one_error_line(trained):
+    root, _ = trained
+    result = run("eval", "ckpt=run/checkpoints/interpolator/last.ckpt", "video_samples=2", "progress=false", cwd=root)
+    assert "but ckpt= holds a 'interpolator' checkpoint; drop video_samples=" in error_line(result)
 
 
 def test_a_resumed_run_keeps_the_csv_metrics_of_the_first_process(tmp_path):

@@ -21,3 +21,14 @@ def test_png_has_one_row_per_clip_and_gif_one_frame_per_step(tmp_path):
     movie = iio.imread(gif, index=None)
     assert movie.shape[0] == 5 and movie.shape[2] == 3 * movie.shape[1]
     assert np.array_equal(iio.imread(png)[:12, :12, :], marked_frames(clips[0], 2, [0], [1])[0])
+
+
+def test_gif_stacks_consecutive_clips_in_columns(tmp_path):
+    clips = torch.arange(6.0).view(6, 1, 1, 1, 1).expand(6, 5, 1, 8, 8) / 5  # clip i is grey i / 5
+    _, gif = save_keyframe_pictures(tmp_path, clips, 2, [[]] * 6, [[]] * 6, per_column=3)
+    movie = iio.imread(gif, index=None)
+    cell = 12 * (256 // 12)  # a bordered frame, scaled
+    assert movie.shape[1:3] == (3 * cell, 2 * cell)  # (identical frames may be merged)
+    centres = movie[0, cell // 2 :: cell, cell // 2 :: cell, 0].astype(int)  # (row, column)
+    expected = (np.arange(6).reshape(2, 3).T * 255 / 5).round()  # clips 0-2 down column 0, 3-5 down column 1
+    assert np.abs(centres - expected).max() <= 2
