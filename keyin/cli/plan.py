@@ -24,7 +24,7 @@ from keyin.planning.runner import PlanJob, run_tasks
 from keyin.planning.servo import ServoParams
 from keyin.planning.tasks import read_tasks, task_generator
 
-AVAILABLE = "initial, random, no_subgoals, demo_subgoals"
+AVAILABLE = "initial, random, no_subgoals, demo_subgoals, keyin, jumpy, tap"
 
 
 def task_files(cfg: DictConfig) -> list[Path]:
@@ -48,29 +48,29 @@ def check_plan(cfg: DictConfig) -> float:
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 0:
         raise ConfigError(f"success_threshold={threshold!r} must be a positive number (world units)")
     if cfg.planner.get("controller") is None:
-        raise ConfigError(
-            f"planner={cfg.planner.name} needs its trained pushing model, which has not landed yet; "
-            f"planners available now: {AVAILABLE}"
-        )
+        raise ConfigError(f"planner={cfg.planner.name} is not implemented yet; planners available: {AVAILABLE}")
     return float(threshold)
 
 
 @user_errors
 def plan(cfg: DictConfig) -> dict:
     threshold = check_plan(cfg)
+    controller = instantiate(cfg.planner.controller)  # a learned planner loads (and checks) its checkpoint
     files = task_files(cfg)
     tasks, generator_config = read_tasks(files)
     tasks = tasks[: cfg.tasks]
     folder = run_dir()
+    checkpoint = cfg.planner.get("checkpoint")
     claim_run_dir(folder, {
         "planner": {k: v for k, v in OmegaConf.to_container(cfg.planner, resolve=True).items() if k != "servo_threads"},
         "seed": cfg.seed,
         "success_threshold": threshold,
         "task_files": {path.name: sha256_of(path) for path in files},
+        **({"checkpoint_sha256": sha256_of(Path(checkpoint))} if checkpoint else {}),  # resuming refuses a retrained one
     })
     job = PlanJob(
         planner=cfg.planner.name,
-        controller=instantiate(cfg.planner.controller),
+        controller=controller,
         servo=ServoParams.from_config(cfg.planner),
         generator=task_generator(generator_config),
         seed=cfg.seed,

@@ -1,3 +1,3 @@
 """Planning (REFERENCE §7, docs/planning.md): a generic CEM, rollouts on the true simulator, the
-low-level servo, the planning tasks and what keyin-plan runs on them; the learned keyframe planners
-come with the trained pushing models."""
+low-level servo, the planning tasks, the high-level planners (KEYIN's and Jumpy's latent CEM, TAP)
+and what keyin-plan runs on them."""

@@ -13,7 +13,7 @@ uses "the same low-level planner" for all methods, so only the subgoals differ):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -32,12 +32,14 @@ class Outcome:
         steps: servo steps executed.
         subgoals: subgoal images handed to the servo, the goal included (0 without a servo).
         subgoals_used: distinct subgoals the servo planned for.
+        diagnostics: the high-level planner's (:class:`keyin.planning.subgoals.Subgoals`).
     """
 
     final_error: float
     steps: int
     subgoals: int = 0
     subgoals_used: int = 0
+    diagnostics: dict[str, float] = field(default_factory=dict)
 
 
 class Controller(Protocol):
@@ -53,10 +55,12 @@ class Hierarchical:
     subgoals: SubgoalPlanner
 
     def run(self, env: Any, task: PlanningTask, servo: ServoParams, rng: np.random.Generator) -> Outcome:
-        intermediate = self.subgoals(task.start_image, task.goal_image, task, rng)
-        images = np.concatenate([intermediate, task.goal_image[None]])
+        planned = self.subgoals(task.start_image, task.goal_image, task, rng)
+        images = np.concatenate([planned.images, task.goal_image[None]])
         result = run_servo(env, subgoal_pixels(images), servo, rng)
-        return Outcome(result.final_error, len(result.subgoal), len(images), len(np.unique(result.subgoal)))
+        return Outcome(
+            result.final_error, len(result.subgoal), len(images), len(np.unique(result.subgoal)), planned.diagnostics
+        )
 
 
 class StayPut:

@@ -57,6 +57,7 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
         "subgoals": outcome.subgoals,
         "subgoals_used": outcome.subgoals_used,
         "seconds": time.perf_counter() - start,
+        **outcome.diagnostics,
     }
 
 

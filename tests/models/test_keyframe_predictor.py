@@ -59,6 +59,14 @@ def test_prior_mode_ignores_future_and_uses_given_z():
     assert not torch.allclose(other_z.offset_probs, without_future.offset_probs)
 
 
+def test_a_prior_sample_is_reproduced_by_passing_its_z():
+    # The latent CEM planner scores z it passes explicitly; they must give the sampled keyframes.
+    predictor = make_predictor().eval()
+    cond_emb, _ = make_embeddings()
+    sampled = predictor(cond_emb, mode="prior", sample=True)
+    torch.testing.assert_close(predictor(cond_emb, mode="prior", z=sampled.z), sampled, rtol=0, atol=0)
+
+
 def test_prior_mode_samples_unless_told_not_to():
     predictor = make_predictor()
     cond_emb, _ = make_embeddings()

@@ -1,0 +1,77 @@
+"""keyin-plan with the learned planners end to end: a stage-2 checkpoint trained for a step on a few
+generated pushing demos, tiny latent-CEM and servo budgets; the configs; the checkpoint errors."""
+
+import json
+
+import pytest
+import torch
+from hydra import compose, initialize_config_dir
+
+from keyin.cli.app import CONFIG_DIR
+from tests.cli.runner import error_line, last_json, run
+
+TRAIN = ("train", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0", "evaluate=false",
+         "trainer.enable_progress_bar=false", "+trainer.num_sanity_val_steps=0", "scale.stage1_steps=1",
+         "scale.stage2_steps=1", "scale.batch_size=2", "scale.val_clips=2", "loss.teacher_weight=0",
+         "hydra.run.dir=trained")
+TINY = ("planner.keyframe_samples=8", "planner.keyframe_elites=2", "planner.keyframe_iterations=1",
+        "planner.servo_samples=16", "planner.elites=4", "planner.cem_iterations=1", "planner.max_timesteps=3",
+        f"planner.torch_threads={torch.get_num_threads()}", "progress=false", "tasks=1")
+KEYFRAMES = "trained/checkpoints/keyframes/last.ckpt"
+
+
+@pytest.fixture(scope="module")
+def root(tmp_path_factory):
+    root = tmp_path_factory.mktemp("learned_planners")
+    generated = run("generate", "dataset=pushing", "splits={train: 4, val: 2, test: 2, planning: 1}", "progress=false",
+                    cwd=root)
+    assert generated.returncode == 0, generated.stderr
+    trained = run(*TRAIN, cwd=root)
+    assert trained.returncode == 0, trained.stderr[-3000:]
+    return root
+
+
+def test_keyin_plans_its_keyframes_as_subgoals(root):
+    result = run("plan", "planner=keyin", f"planner.checkpoint={KEYFRAMES}", "hydra.run.dir=keyin", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert last_json(result.stdout)["n_tasks"] == 1
+    (record,) = [json.loads(line) for line in (root / "keyin" / "tasks.jsonl").read_text().splitlines()]
+    assert record["planner"] == "keyin" and record["steps"] == 3 and record["subgoals"] == 6 + 1  # K^1..K^6, goal
+    assert 0 <= record["plan_samples_without_puck"] <= 8 and 0 <= record["plan_cost_px"] <= 64 * 2**0.5
+    assert len(json.loads((root / "keyin" / "plan.json").read_text())["checkpoint_sha256"]) == 64
+
+
+def test_resuming_with_a_retrained_checkpoint_is_refused(root):
+    checkpoint = root / "copy.ckpt"
+    checkpoint.write_bytes((root / KEYFRAMES).read_bytes())
+    overrides = ("planner=keyin", f"planner.checkpoint={checkpoint}", *TINY)
+    assert run("plan", *overrides, "hydra.run.dir=retrained", cwd=root).returncode == 0
+    checkpoint.write_bytes(checkpoint.read_bytes() + b"\0")  # another file at the same path
+    assert "checkpoint_sha256=" in error_line(run("plan", *overrides, "resume=retrained", cwd=root))
+
+
+@pytest.mark.parametrize("overrides,message", [
+    (("planner=keyin",), "checkpoint runs/multirun/pushing_table1/keyin_seed0/checkpoints/keyframes/last.ckpt "
+                         "does not exist; the planner needs a model=keyin dataset=pushing checkpoint: make it with "
+                         "`keyin-train -m experiment=pushing_table1 model=keyin seed=0`"),
+    (("planner=keyin", "planner.checkpoint=trained/checkpoints/interpolator/last.ckpt"),
+     "is a 'interpolator' checkpoint but a 'keyframes' one is needed"),
+    (("planner=jumpy", f"planner.checkpoint={KEYFRAMES}"),
+     f"{KEYFRAMES} holds a model=keyin dataset=pushing checkpoint; the planner needs a model=jumpy"),
+    (("planner=tap", f"planner.checkpoint={KEYFRAMES}"), "`keyin-train model=tap dataset=pushing"),
+    (("planner=tap",), "checkpoint runs/pushing_tap/checkpoints/tap/last.ckpt does not exist"),
+])
+def test_a_missing_or_wrong_checkpoint_gives_one_error_line(root, overrides, message):
+    assert message in error_line(run("plan", *overrides, "hydra.run.dir=bad", cwd=root))
+
+
+def test_jumpy_is_the_latent_cem_with_the_jumpy_model_and_table2_sweeps_the_learned_rows():
+    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+        keyin = compose("plan", overrides=["planner=keyin"]).planner
+        jumpy = compose("plan", overrides=["planner=jumpy"]).planner
+        sweep = compose("plan", ["experiment=pushing_table2"], return_hydra_config=True).hydra.sweeper.params.planner
+    assert jumpy.controller.subgoals._target_ == keyin.controller.subgoals._target_
+    assert (jumpy.controller.subgoals.model, keyin.controller.subgoals.model) == ("jumpy", "keyin")
+    assert jumpy.checkpoint == "runs/multirun/pushing_table1/jumpy_seed0/checkpoints/keyframes/last.ckpt"
+    assert jumpy.keyframe_samples == 200 and jumpy.keyframe_elites == 10 and jumpy.keyframe_iterations == 3
+    assert {"keyin", "jumpy", "tap"} <= set(sweep.split(","))
