@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any, Mapping
 
 import lightning as L
 from torch.utils.data import DataLoader, Dataset
+from torchdata.stateful_dataloader import StatefulDataLoader
 
 from keyin.data.clips import GeneratedClips, ShardClips
 from keyin.data.generate import split_seed
@@ -32,7 +34,7 @@ def split_clips(
 
 
 class ClipDataModule(L.LightningDataModule):
-    """Shuffled training clips and a fixed validation set."""
+    """Shuffled training clips (resumable mid-epoch) and a fixed validation set."""
 
     def __init__(self, train: Dataset, val: Dataset, batch_size: int, num_workers: int) -> None:
         super().__init__()
@@ -45,15 +47,19 @@ class ClipDataModule(L.LightningDataModule):
         self.train, self.val = train, val
         self.batch_size, self.num_workers = batch_size, num_workers
 
-    def train_dataloader(self) -> DataLoader:
-        return DataLoader(
-            self.train,
-            batch_size=self.batch_size,
-            shuffle=True,
-            drop_last=True,
-            num_workers=self.num_workers,
-            persistent_workers=self.num_workers > 0,
-        )
+    def train_dataloader(self) -> StatefulDataLoader:
+        """Shuffled batches from a loader whose position Lightning keeps in every checkpoint, so a
+        run resumed mid-epoch continues the epoch's order instead of starting it again."""
+        with warnings.catch_warnings():  # torchdata 0.11 calls a deprecated torch telemetry hook
+            warnings.filterwarnings("ignore", message="'set_vital' is deprecated")
+            return StatefulDataLoader(
+                self.train,
+                batch_size=self.batch_size,
+                shuffle=True,
+                drop_last=True,
+                num_workers=self.num_workers,
+                persistent_workers=self.num_workers > 0,
+            )
 
     def val_dataloader(self) -> DataLoader:
         return DataLoader(self.val, batch_size=len(self.val), num_workers=0)

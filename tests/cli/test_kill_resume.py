@@ -126,6 +126,8 @@ def test_train_killed_after_a_checkpoint_resumes_its_step_count_and_optimizer_st
     assert kill_when("checkpoint", TRAIN, tmp_path, lambda pid: last.is_file()) == -9
     killed = load_checkpoint(last)
     assert killed["global_step"] == 2 and adam_steps(killed) == {2.0}
+    (loader,) = killed["loops"]["fit_loop"]["state_dict"]["combined_loader"]
+    assert loader["_num_yielded"] == 2  # the train loader's place in the epoch is kept: resuming continues it
 
     # Resumed to the step it was killed at (no further step), the state saved again is the same.
     shutil.copytree(tmp_path / "run", tmp_path / "copy")
