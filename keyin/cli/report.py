@@ -60,11 +60,20 @@ def example_predictions(records: list[dict], dataset: str) -> tuple[Path, dict[s
     return job, {method: predicted[method] for method in sorted(predicted, key=method_sort_key)}, truth
 
 
+def job_data_dir(job: Path, data_dir: str) -> Path:
+    """The job's ``data_dir``; a relative one is taken from the folder the job ran in (Hydra's
+    ``runtime.cwd``), so the report finds the data wherever it is run from."""
+    hydra_file = job / ".hydra" / "hydra.yaml"
+    if Path(data_dir).is_absolute() or not hydra_file.is_file():
+        return Path(data_dir)
+    return Path(OmegaConf.load(hydra_file).hydra.runtime.cwd) / data_dir
+
+
 def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
     """The first ``count`` test clips of the job's dataset, rebuilt from its saved Hydra config."""
     cfg = OmegaConf.load(job / ".hydra" / "config.yaml")
     dataset = cfg.dataset
-    clips = split_clips(dataset, instantiate(dataset.generator), "test", None, cfg.data_dir)
+    clips = split_clips(dataset, instantiate(dataset.generator), "test", None, job_data_dir(job, cfg.data_dir))
     frames = torch.stack([clips[i]["frames"] for i in range(min(count, len(clips)))])
     return frames, dataset.n_cond
 

@@ -25,12 +25,13 @@ def sweep(tmp_path_factory):
     return root / "runs" / "multirun" / "pushing_table1"
 
 
-def test_every_pushing_model_trains_and_scores_its_keyframes(sweep):
+def test_every_pushing_model_trains_and_scores_its_keyframes(sweep, tmp_path, monkeypatch):
     for name in (*TRAINED, "constant"):
         metrics = json.loads((sweep / f"{name}_seed0" / "metrics.json").read_text())
         assert metrics["method"] == name and metrics["dataset"] == "pushing" and metrics["n_sequences"] == 4
         assert 0.0 <= metrics["f1"] <= 1.0
     assert (sweep / "stage1_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
+    monkeypatch.chdir(tmp_path)  # the report finds each job's data where the job ran, not in its own cwd
     report.main([str(sweep), "--examples", "1"])
     table = (sweep / "report" / "table1.md").read_text()
     assert "| pushing | keyin |" in table and "| 0.30 |" in table  # the paper's pushing column beside ours
