@@ -25,6 +25,7 @@ from keyin.data.hdf5 import split_files
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.eval.segmentation import boundary_segment_costs, decode_by_length, interpolation_costs, with_sequence_ends
 from keyin.lit.checkpoints import load_trained_module
+from keyin.losses.image import future_pixel_weights
 
 
 @torch.no_grad()
@@ -49,8 +50,12 @@ def main() -> None:
     embeddings = module.encoder(batch["frames"])
     keys = module.predictor(embeddings[:, :n_cond], embeddings[:, n_cond:], lengths, mode="posterior", sample=False)
     boundary_emb, future = embeddings[:, n_cond - 1 :], batch["frames"][:, n_cond:].flatten(2)
+    weights = future_pixel_weights(module.pixel_weights(batch["frames"]), n_cond)
     pixel_costs = {  # per clip length: (clips of that length, their segment costs)
-        length: interpolation_costs(module.interpolator, module.decoder, boundary_emb[rows, : length + 1], future[rows, :length])
+        length: interpolation_costs(
+            module.interpolator, module.decoder, boundary_emb[rows, : length + 1], future[rows, :length],
+            None if weights is None else weights[rows, :length],
+        )
         for length in lengths.unique().tolist()
         for rows in [(lengths == length).nonzero().flatten()]
     }

@@ -19,6 +19,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from keyin.losses.image import future_pixel_weights
 from keyin.losses.soft_keyframe import IGNORE_OFFSET
 
 SPACES = ("pixels", "embeddings")
@@ -106,6 +107,7 @@ def interpolation_costs(
     decoder: torch.nn.Module,
     boundary_emb: Tensor,
     frames: Tensor,
+    weights: Tensor | None = None,
     chunk: int = 4096,
 ) -> Tensor:
     """Summed pixel BCE of interpolating every in-clip segment between true boundary embeddings.
@@ -115,6 +117,7 @@ def interpolation_costs(
         decoder: the decoder it was trained with (returns logits).
         boundary_emb: (B, N + 1, E) embeddings on the extended index (K^0, then the N future frames).
         frames: (B, N, D) the future frames in [0, 1], flattened.
+        weights: (B, N, D) their pixel weights (keyin/losses/image.py), None for the plain BCE.
         chunk: segments per interpolator/decoder call.
     Returns:
         (B, N, S) costs, ``inf`` where the segment leaves the clip.
@@ -128,8 +131,10 @@ def interpolation_costs(
         predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
         positions, valid = _output_positions(a, o, max_offset, n_future)
         logits = decoder(predicted[valid]).flatten(1)  # (V, D)
-        targets = frames[c[:, None].expand_as(positions)[valid], positions[valid]]
-        bce = F.binary_cross_entropy_with_logits(logits, targets, reduction="none").sum(1)
+        rows = c[:, None].expand_as(positions)[valid]
+        targets = frames[rows, positions[valid]]
+        pixel_weights = None if weights is None else weights[rows, positions[valid]]
+        bce = F.binary_cross_entropy_with_logits(logits, targets, pixel_weights, reduction="none").sum(1)
         costs[c, a, o - 1] = bce.new_zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
     return costs
 
@@ -254,6 +259,7 @@ def map_keyframes(
     keyframe_cost: float,
     scores: Tensor | None = None,
     boundary_weight: float = 0.0,
+    weights: Tensor | None = None,
 ) -> list[list[int]]:
     """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
     optionally, the keyframe predictor's boundary scores as a prior.
@@ -265,6 +271,7 @@ def map_keyframes(
         boundary_emb: (B, N + 1, E) embeddings on the extended index; frames: (B, N, D) in [0, 1].
         lengths: (B,) valid future frames.
         scores: (B, N) boundary logits, or None for the interpolation cost alone.
+        weights: (B, N, D) pixel weights of the frames, None for the plain BCE.
     Returns:
         Per clip, the interior keyframe positions.
     """
@@ -272,7 +279,10 @@ def map_keyframes(
 
     def segment_costs(rows: Tensor, length: int) -> Tensor:
         rows = rows.to(boundary_emb.device)
-        costs = interpolation_costs(interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length])
+        costs = interpolation_costs(
+            interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
+            None if weights is None else weights[rows, :length],
+        )
         if scores is not None and boundary_weight:
             costs = costs + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset)
         return costs  # best_segmentation moves it to the CPU
@@ -329,6 +339,7 @@ class SegmentationDiscoverer:
         n_cond = self.stage1.hparams.n_cond
         boundary_emb = self.stage1.encoder(clips)[:, n_cond - 1 :]  # (B, N + 1, E)
         frames = clips[:, n_cond:].flatten(2)
+        weights = future_pixel_weights(self.stage1.pixel_weights(clips), n_cond)
 
         def segment_costs(rows: Tensor, length: int) -> Tensor:
             rows = rows.to(boundary_emb.device)
@@ -336,7 +347,8 @@ class SegmentationDiscoverer:
                 costs = embedding_costs(self.stage1.interpolator, boundary_emb[rows, : length + 1])
             else:
                 costs = interpolation_costs(
-                    self.stage1.interpolator, self.stage1.decoder, boundary_emb[rows, : length + 1], frames[rows, :length]
+                    self.stage1.interpolator, self.stage1.decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
+                    None if weights is None else weights[rows, :length],
                 )
             self.last_costs = costs
             return costs

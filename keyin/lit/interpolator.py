@@ -16,6 +16,7 @@ import torch
 import torch.nn.functional as F
 
 from keyin.data.segments import all_segments, crosses_keyframe, partition_segments, segment_frames
+from keyin.losses.image import model_pixel_weights
 from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models import ConvDecoder, ConvEncoder, Interpolator, InterpolatorPosterior
 
@@ -48,6 +49,8 @@ class InterpolatorModule(L.LightningModule):
         lr: float,
         ae_frames: int = 0,
         diagnostic_clips: int = 24,
+        foreground_weight: float = 1.0,
+        foreground_threshold: float = 0.1,
     ) -> None:
         super().__init__()
         if not 1 <= offset_min <= offset_max <= max_offset:
@@ -108,15 +111,29 @@ class InterpolatorModule(L.LightningModule):
         )
         return predicted, valid, kl
 
+    def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
+        """(B, L, C, H, W) weights of the image likelihood, None for the plain BCE (keyin/losses/image.py)."""
+        return model_pixel_weights(clips, self.hparams)
+
     def _segment_bce(
-        self, clips: torch.Tensor, embeddings: torch.Tensor, clip, start, offset, latent: str
+        self,
+        clips: torch.Tensor,
+        weights: torch.Tensor | None,
+        embeddings: torch.Tensor,
+        clip,
+        start,
+        offset,
+        latent: str,
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Per-segment summed BCE of the existing outputs, their count, and the KL."""
+        """Per-segment summed BCE of the existing outputs (pixel ``weights`` like ``clips``, or
+        None), their count, and the KL."""
         predicted, valid, kl = self.interpolate(embeddings, clip, start, offset, latent)
         frames, _ = segment_frames(start.to(clips.device), offset.to(clips.device), self.hparams.max_offset)
-        targets = clips[clip.to(clips.device)[:, None], frames][valid]  # (V, C, H, W)
+        rows = clip.to(clips.device)[:, None]
+        targets = clips[rows, frames][valid]  # (V, C, H, W)
+        weights = None if weights is None else weights[rows, frames][valid]
         logits = self.decoder(predicted[valid])
-        bce = F.binary_cross_entropy_with_logits(logits, targets, reduction="none").flatten(1).sum(1)
+        bce = F.binary_cross_entropy_with_logits(logits, targets, weights, reduction="none").flatten(1).sum(1)
         per_segment = torch.zeros(valid.shape[0], device=clips.device).index_put_(
             (valid.nonzero()[:, 0],), bce, accumulate=True
         )
@@ -127,14 +144,17 @@ class InterpolatorModule(L.LightningModule):
         n_clips, clip_length = clips.shape[:2]
         lengths = self.hparams.n_cond + batch["future_length"]  # (B,) valid frames; the rest is padding
         embeddings = self.encoder(clips)  # (B, L, E)
+        weights = self.pixel_weights(clips)
         clip, start, offset = partition_segments(
             lengths, self.hparams.offset_min, self.hparams.offset_max, self.segment_rng
         )
-        bce, _, kl = self._segment_bce(clips, embeddings, clip, start, offset, "posterior")
+        bce, _, kl = self._segment_bce(clips, weights, embeddings, clip, start, offset, "posterior")
         reconstruction = bce.sum() / n_clips
         kl_term = kl.sum() / n_clips
         valid = torch.arange(clip_length, device=clips.device)[None] < lengths.to(clips.device)[:, None]
-        autoencoding = self._autoencoding_bce(clips[valid], embeddings[valid]) / n_clips
+        autoencoding = self._autoencoding_bce(
+            clips[valid], embeddings[valid], None if weights is None else weights[valid]
+        ) / n_clips
         loss = reconstruction + self.hparams.kl_weight * kl_term + self.hparams.ae_weight * autoencoding
         self.log_dict(
             {
@@ -147,8 +167,10 @@ class InterpolatorModule(L.LightningModule):
         )
         return loss
 
-    def _autoencoding_bce(self, frames: torch.Tensor, embeddings: torch.Tensor) -> torch.Tensor:
-        """Summed BCE of decoding the frames' own embeddings, (F, C, H, W) and (F, E).
+    def _autoencoding_bce(
+        self, frames: torch.Tensor, embeddings: torch.Tensor, weights: torch.Tensor | None
+    ) -> torch.Tensor:
+        """Summed (pixel-weighted) BCE of decoding the frames' own embeddings, (F, C, H, W) and (F, E).
 
         With ``ae_frames`` > 0 a uniform random subset of that many frames is decoded and the sum is
         rescaled to all frames (an unbiased estimate at a fraction of the decoder's cost).
@@ -157,7 +179,8 @@ class InterpolatorModule(L.LightningModule):
         if 0 < self.hparams.ae_frames < n_frames:
             pick = torch.randperm(n_frames, generator=self.segment_rng)[: self.hparams.ae_frames].to(frames.device)
             frames, embeddings = frames[pick], embeddings[pick]
-        bce = F.binary_cross_entropy_with_logits(self.decoder(embeddings), frames, reduction="sum")
+            weights = None if weights is None else weights[pick]
+        bce = F.binary_cross_entropy_with_logits(self.decoder(embeddings), frames, weights, reduction="sum")
         return bce * n_frames / frames.shape[0]
 
     @torch.no_grad()
@@ -172,13 +195,14 @@ class InterpolatorModule(L.LightningModule):
         n_cond = self.hparams.n_cond
         keyframes = F.pad(batch["keyframes"][: len(clips)], (n_cond, 0))  # on the clip axis
         embeddings = self.encoder(clips)
+        weights = self.pixel_weights(clips)
         last = n_cond - 1 + batch["future_length"][: len(clips)].cpu()  # (B,) last valid frame
         table = {}
         for offset in range(1, self.hparams.max_offset + 1):
             clip, start, offs = all_segments(len(clips), n_cond - 1, clips.shape[1] - 1, offset)
             inside = start + offs <= last[clip]  # segments that reach into the padding are left out
             clip, start, offs = clip[inside], start[inside], offs[inside]
-            bce, count, _ = self._segment_bce(clips, embeddings, clip, start, offs, latent)
+            bce, count, _ = self._segment_bce(clips, weights, embeddings, clip, start, offs, latent)
             bent = crosses_keyframe(keyframes.cpu(), clip, start, offs).to(bce.device)
             per_frame = bce / count
             table[offset] = {

@@ -24,6 +24,7 @@ from keyin.eval.segmentation import (
     segmentation_offsets,
     with_sequence_ends,
 )
+from keyin.losses.image import future_pixel_weights, model_pixel_weights
 from keyin.losses.soft_keyframe import (
     argmax_frames,
     argmax_positions,
@@ -89,6 +90,10 @@ class KeyframeModule(L.LightningModule):
         )
         self.freeze_stage1()
 
+    def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
+        """(B, L, C, H, W) weights of the image likelihood stage 1 was trained with, or None."""
+        return model_pixel_weights(clips, self.hparams.stage1)
+
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
         for name in FROZEN:
@@ -152,6 +157,7 @@ class KeyframeModule(L.LightningModule):
         clips, future_length = batch["frames"], batch["future_length"]
         n_cond = self.hparams.stage1["n_cond"]
         out = self(clips, future_length)
+        weights = future_pixel_weights(self.pixel_weights(clips), n_cond)
         terms = keyin_loss(
             offset_probs=out["offset_probs"],
             key_emb_pred=out["key_emb"],
@@ -164,6 +170,7 @@ class KeyframeModule(L.LightningModule):
             beta_ki=self.hparams.beta_ki,
             beta_kl=self.hparams.beta_kl,
             normalize_key_targets=self.hparams.normalize_key_targets,
+            pixel_weights=weights,
         )
         if stage == "train" and self.hparams.teacher_weight > 0:
             teacher = self._teacher_loss(out, future_length)
@@ -257,10 +264,12 @@ class KeyframeModule(L.LightningModule):
             )
             return with_sequence_ends(interior, future_length.cpu(), clips.shape[1] - n_cond)
         if discovery == "map":
+            clips = clips.to(self.device)
             interior = map_keyframes(
-                self.interpolator, self.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2).to(self.device),
+                self.interpolator, self.decoder, embeddings[:, n_cond - 1 :], clips[:, n_cond:].flatten(2),
                 future_length, self.hparams.n_keyframes, self.hparams.map_keyframe_cost,
                 keys.boundary_scores, self.hparams.map_boundary_weight,
+                weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
             )
             return with_sequence_ends(interior, future_length.cpu(), clips.shape[1] - n_cond)
         positions = argmax_positions(keys.offset_probs).cpu()

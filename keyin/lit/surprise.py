@@ -17,6 +17,7 @@ import torch.nn.functional as F
 
 from keyin.eval.f1 import discovery_summary
 from keyin.eval.surprise import surprise_keyframes
+from keyin.losses.image import model_pixel_weights
 from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models import ConvDecoder, ConvEncoder, SVGCore
 
@@ -44,6 +45,8 @@ class SurpriseModule(L.LightningModule):
             (docs/baselines.md); a warm-up lets it carry information first.
         beta_delay: steps at KL weight 0 before the warm-up starts (the decoder learns to draw
             first; even a small weight can collapse the posterior while it cannot).
+        foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels,
+            as in KEYIN's stage 1 (keyin/losses/image.py; 1: plain BCE).
     """
 
     stage = "surprise"
@@ -69,6 +72,8 @@ class SurpriseModule(L.LightningModule):
         ae_weight: float = 0.0,
         beta_warmup: int = 0,
         beta_delay: int = 0,
+        foreground_weight: float = 1.0,
+        foreground_threshold: float = 0.1,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -96,13 +101,18 @@ class SurpriseModule(L.LightningModule):
         valid = valid_all[:, 1:]
         embeddings = self.encoder(clips)
         predicted, mu, log_sigma = self.core(embeddings, sample=sample)
+        weights = model_pixel_weights(clips, self.hparams)
         logits = self.decoder(predicted.flatten(0, 1)).view_as(clips[:, 1:])
-        bce = F.binary_cross_entropy_with_logits(logits, clips[:, 1:], reduction="none").flatten(2).sum(-1)
+        bce = F.binary_cross_entropy_with_logits(
+            logits, clips[:, 1:], None if weights is None else weights[:, 1:], reduction="none"
+        ).flatten(2).sum(-1)
         kl = gaussian_kl(mu[:, 1:], log_sigma[:, 1:])
         autoencoding = clips.new_zeros(())
         if self.hparams.ae_weight > 0:
-            frames = clips[valid_all]
-            autoencoding = F.binary_cross_entropy_with_logits(self.decoder(embeddings[valid_all]), frames, reduction="sum")
+            autoencoding = F.binary_cross_entropy_with_logits(
+                self.decoder(embeddings[valid_all]), clips[valid_all],
+                None if weights is None else weights[valid_all], reduction="sum",
+            )
         return bce * valid, kl * valid, valid, autoencoding
 
     def kl_weight(self) -> float:

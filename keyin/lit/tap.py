@@ -18,6 +18,7 @@ import torch
 from torch.utils.data import Dataset
 
 from keyin.eval.tap import save_subgoal_grid, score_whole_clips
+from keyin.losses.image import model_pixel_weights
 from keyin.losses.tap import (
     admissible_frames,
     argmin_times,
@@ -41,6 +42,8 @@ class TAPModule(L.LightningModule):
         min_gap: the least b - a drawn in training; None: the least that leaves one admissible
             frame (2·margin + 2).
         max_gap: the most b - a drawn in training; None: the whole valid clip.
+        foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels,
+            as in KEYIN's stage 1 (keyin/losses/image.py; 1: plain BCE).
         The other arguments size :class:`keyin.models.TAPNetwork`; ``lr`` is Adam's.
     """
 
@@ -61,6 +64,8 @@ class TAPModule(L.LightningModule):
         margin: int = 1,
         min_gap: int | None = None,
         max_gap: int | None = None,
+        foreground_weight: float = 1.0,
+        foreground_threshold: float = 0.1,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -84,7 +89,7 @@ class TAPModule(L.LightningModule):
         frames, n_valid, start, goal = (x.to(self.device) for x in (frames, n_valid, start, goal))
         logits = self.network(*pair_images(frames, start, goal))
         admissible = admissible_frames(start, goal, n_valid, frames.shape[1], self.hparams.margin)
-        return min_over_time_bce(logits, frames, admissible)
+        return min_over_time_bce(logits, frames, admissible, model_pixel_weights(frames, self.hparams))
 
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> torch.Tensor:
         frames = batch["frames"]

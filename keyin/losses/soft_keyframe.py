@@ -181,7 +181,9 @@ def gaussian_kl(mu: Tensor, log_sigma: Tensor) -> Tensor:
     return (-log_sigma + 0.5 * (torch.exp(2 * log_sigma) + mu**2) - 0.5).sum(-1)
 
 
-def bce_sum(probs: Tensor, targets: Tensor, mask: Tensor | None = None) -> Tensor:
+def bce_sum(
+    probs: Tensor, targets: Tensor, mask: Tensor | None = None, weights: Tensor | None = None
+) -> Tensor:
     """Binary cross-entropy on probabilities, summed over pixels (REFERENCE §3.6, §8.6, §8.12).
 
     Probabilities are clamped to [1e-6, 1 - 1e-6]; mixtures of sigmoid outputs have no logits, so
@@ -191,6 +193,7 @@ def bce_sum(probs: Tensor, targets: Tensor, mask: Tensor | None = None) -> Tenso
         probs: (..., F, D) predicted probabilities.
         targets: (..., F, D) targets in [0, 1]; masked frames may hold anything.
         mask: (..., F) bool, frames that count; None keeps all.
+        weights: (..., F, D) per-pixel weights (keyin/losses/image.py); None weighs all 1.
     Returns:
         (..., F) per-frame BCE summed over D; 0 at masked frames.
     """
@@ -200,7 +203,8 @@ def bce_sum(probs: Tensor, targets: Tensor, mask: Tensor | None = None) -> Tenso
         targets = targets.masked_fill(~mask[..., None], 0.0)
     # y log p + (1 - y) log(1 - p) rearranged to save two full passes over the pixels.
     log_not_probs = torch.log1p(-probs)
-    per_frame = -(log_not_probs + targets * (torch.log(probs) - log_not_probs)).sum(-1)
+    per_pixel = log_not_probs + targets * (torch.log(probs) - log_not_probs)
+    per_frame = -(per_pixel if weights is None else per_pixel * weights).sum(-1)
     if mask is not None:
         per_frame = per_frame.masked_fill(~mask, 0.0)
     return per_frame
@@ -224,6 +228,7 @@ def keyin_loss(
     beta_kl: float,
     normalize_key_targets: bool = True,
     key_frames_pred: Tensor | None = None,
+    pixel_weights: Tensor | None = None,
 ) -> dict[str, Tensor]:
     """KEYIN stage-2 loss ``L_key + L_inter`` (paper eq. 3-5, REFERENCE §3.6).
 
@@ -245,6 +250,8 @@ def keyin_loss(
         beta_kl: weight of the KL term.
         normalize_key_targets: divide the soft keyframe targets by c^t (REFERENCE §3.4).
         key_frames_pred: (B, M, D) decoded keyframes K̂^t as probabilities.
+        pixel_weights: (B, N, D) weights of the future frames' pixels in ``L_inter``
+            (keyin/losses/image.py); None: the plain BCE.
     Returns:
         ``loss`` (scalar); batch means ``key`` (L_key), ``key_emb``, ``kl``, ``inter`` (L_inter)
         and, if beta_ki > 0, ``key_img`` — the terms are c-weighted averages over keyframes and
@@ -282,7 +289,7 @@ def keyin_loss(
         key_loss = (key_weights * per_key).sum(-1)  # (B,)
 
         mixed, coverage = soft_frames(frame_pos, inter_frames_pred, n_future)
-        inter_loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future)).sum(-1)
+        inter_loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future), pixel_weights).sum(-1)
 
         result = {name: (key_weights * term).sum(-1).mean() for name, term in terms.items()}
         result.update(

@@ -93,25 +93,34 @@ def pair_images(frames: Tensor, start: Tensor, goal: Tensor) -> tuple[Tensor, Te
     return frames[rows, start], frames[rows, goal]
 
 
-def frame_bce(logits: Tensor, frames: Tensor) -> Tensor:
+def frame_bce(logits: Tensor, frames: Tensor, weights: Tensor | None = None) -> Tensor:
     """BCE of one predicted frame against every frame of its clip, summed over pixels.
 
-    Per pixel BCE(x, y) = softplus(x) - y·x for a logit x, so the L comparisons are one batched
-    dot product and no (B, L, C, H, W) copy of the prediction is made.
+    Per pixel BCE(x, y) = softplus(x) - y·x for a logit x, so the L comparisons are batched dot
+    products and no (B, L, C, H, W) copy of the prediction is made.
 
     Args:
         logits: (B, C, H, W) predicted logits.
         frames: (B, L, C, H, W) targets in [0, 1].
+        weights: (B, L, C, H, W) pixel weights of the targets (keyin/losses/image.py), or None.
     Returns:
         (B, L) per-frame BCE.
     """
     flat_logits = logits.flatten(1)  # (B, D)
     flat_frames = frames.flatten(2)  # (B, L, D)
-    matches = torch.einsum("bld,bd->bl", flat_frames, flat_logits)  # (B, L)
-    return F.softplus(flat_logits).sum(-1, keepdim=True) - matches
+    softplus = F.softplus(flat_logits)
+    if weights is None:
+        matches = torch.einsum("bld,bd->bl", flat_frames, flat_logits)  # (B, L)
+        return softplus.sum(-1, keepdim=True) - matches
+    flat_weights = weights.flatten(2)
+    return torch.einsum("bld,bd->bl", flat_weights, softplus) - torch.einsum(
+        "bld,bd->bl", flat_weights * flat_frames, flat_logits
+    )
 
 
-def min_over_time_bce(logits: Tensor, frames: Tensor, admissible: Tensor) -> tuple[Tensor, Tensor]:
+def min_over_time_bce(
+    logits: Tensor, frames: Tensor, admissible: Tensor, weights: Tensor | None = None
+) -> tuple[Tensor, Tensor]:
     """TAP's loss: the BCE of the prediction against its best-matching admissible frame.
 
     The logits form needs no clipping of probabilities (REFERENCE §8.12). The gradient reaches
@@ -121,6 +130,7 @@ def min_over_time_bce(logits: Tensor, frames: Tensor, admissible: Tensor) -> tup
         logits: (B, C, H, W) predicted logits.
         frames: (B, L, C, H, W) the clips, in [0, 1].
         admissible: (B, L) bool (:func:`admissible_frames`); every row needs one True.
+        weights: (B, L, C, H, W) pixel weights of the frames, or None for the plain BCE.
     Returns:
         loss: (B,) the minimum over admissible t of the per-frame BCE summed over pixels;
         argmin: (B,) int64, that t.
@@ -129,7 +139,7 @@ def min_over_time_bce(logits: Tensor, frames: Tensor, admissible: Tensor) -> tup
     """
     if not admissible.any(dim=1).all():
         raise ValueError("a clip has no admissible frame for TAP's minimum over time; widen its (start, goal) pair")
-    per_frame = frame_bce(logits, frames).masked_fill(~admissible, float("inf"))
+    per_frame = frame_bce(logits, frames, weights).masked_fill(~admissible, float("inf"))
     loss, argmin = per_frame.min(dim=1)
     return loss, argmin
 

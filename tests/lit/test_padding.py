@@ -4,6 +4,7 @@ Each test computes a loss twice on the same batch, once with the padding replace
 asserts the two are equal: the pushing demonstrations have clips of 26-31 frames padded to 31.
 """
 
+import pytest
 import torch
 
 from keyin.data.segments import partition_segments
@@ -39,9 +40,10 @@ def test_stage1_segments_stay_inside_each_clips_valid_frames():
         assert int((start + offset)[clip == index].max()) > length - 1 - 6
 
 
-def test_stage1_loss_ignores_the_padding():
+@pytest.mark.parametrize("foreground_weight", [1.0, 5.0])
+def test_stage1_loss_ignores_the_padding(foreground_weight):
     torch.manual_seed(0)
-    module = InterpolatorModule(**STAGE1)
+    module = InterpolatorModule(**STAGE1, foreground_weight=foreground_weight)
     module.log_dict = lambda *args, **kwargs: None
     losses = []
     for batch in padded_batches():
@@ -59,8 +61,9 @@ def test_stage1_diagnostic_ignores_the_padding():
     assert torch.allclose(values[0].nan_to_num(), values[1].nan_to_num())
 
 
-def test_stage2_loss_teacher_and_attention_ignore_the_padding():
-    module = keyframe_module(teacher_weight=10.0, offset_evidence=True)
+@pytest.mark.parametrize("foreground_weight", [1.0, 5.0])
+def test_stage2_loss_teacher_and_attention_ignore_the_padding(foreground_weight):
+    module = keyframe_module(teacher_weight=10.0, offset_evidence=True, foreground_weight=foreground_weight)
     module.hparams.teacher_clips = 0  # every clip, the short ones included
     results = []
     for batch in padded_batches():
@@ -74,3 +77,20 @@ def test_stage2_loss_teacher_and_attention_ignore_the_padding():
     assert torch.allclose(attention, noisy_attention)
     padding = ~(torch.arange(6)[None] < LENGTHS[:, None])  # (B, N)
     assert float(attention.masked_select(padding[:, None, :].expand_as(attention)).abs().max()) == 0.0
+
+
+def test_stage1_and_stage2_weigh_pixels_as_stage1_says():
+    """A threshold below 0 marks every pixel as changed: weight 5 gives exactly 5x the plain BCE."""
+    batch = padded_batches()[0]
+    stage1_losses, inter_losses = [], []
+    for weight in (1.0, 5.0):
+        torch.manual_seed(0)
+        module = InterpolatorModule(**STAGE1, foreground_weight=weight, foreground_threshold=-1.0)
+        module.log_dict = lambda *args, **kwargs: None
+        module.segment_rng.manual_seed(0)
+        stage1_losses.append(module.training_step(batch, 0))  # kl_weight 0: BCE terms only
+        stage2 = keyframe_module(teacher_weight=0.0, foreground_weight=weight, foreground_threshold=-1.0)
+        torch.manual_seed(2)
+        inter_losses.append(stage2._shared_step(batch, "train")["inter"])
+    assert torch.allclose(stage1_losses[1], 5 * stage1_losses[0])
+    assert torch.allclose(inter_losses[1], 5 * inter_losses[0])

@@ -6,12 +6,12 @@ from keyin.eval.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule, kl_schedule
 
 
-def module() -> SurpriseModule:
+def module(**overrides) -> SurpriseModule:
     torch.manual_seed(0)
     return SurpriseModule(
         image_size=8, channels=1, n_cond=2, n_future=6, n_keyframes=3, embed_dim=8, conv_width=4,
         coord_channels=True, norm="group", latent_dim=3, lstm_hidden=16, predictor_layers=1,
-        posterior_layers=1, beta=0.1, lr=1e-3,
+        posterior_layers=1, beta=0.1, lr=1e-3, **overrides,
     )
 
 
@@ -47,3 +47,17 @@ def test_the_kl_weight_waits_then_rises_linearly_to_beta():
     weights = [kl_schedule(step, beta=2.0, warmup=100, delay=50) for step in (0, 49, 50, 100, 150, 400)]
     assert weights == [0.0, 0.0, 0.0, 1.0, 2.0, 2.0]
     assert [kl_schedule(step, beta=2.0, warmup=0, delay=0) for step in (0, 7)] == [2.0, 2.0]
+
+
+def test_pixel_weights_scale_the_prediction_and_autoencoding_bce():
+    """Threshold below 0: every pixel weighs 5, so both BCE terms are exactly 5x; the KL is not."""
+    frames, lengths = torch.rand(2, 8, 1, 8, 8), torch.tensor([6, 3])
+    terms = []
+    for weight in (1.0, 5.0):
+        model = module(ae_weight=1.0, foreground_weight=weight, foreground_threshold=-1.0)
+        torch.manual_seed(1)
+        terms.append(model._terms({"frames": frames, "future_length": lengths}))
+    (bce, kl, _, ae), (bce5, kl5, _, ae5) = terms
+    torch.testing.assert_close(bce5, 5 * bce)
+    torch.testing.assert_close(ae5, 5 * ae)
+    torch.testing.assert_close(kl5, kl)

@@ -59,3 +59,12 @@ def test_subgoals_are_images_and_tap_discovers_no_keyframes():
 def test_a_gap_range_without_admissible_frames_is_refused(overrides):
     with pytest.raises(ValueError, match="margin"):
         module(**overrides)
+
+
+def test_pixel_weights_scale_the_min_over_time_loss():
+    """Threshold below 0: every pixel weighs 5, so the validation loss is exactly 5x."""
+    model = module()
+    weighted = module(foreground_weight=5.0, foreground_threshold=-1.0)
+    weighted.log_dict = model.log_dict = lambda *args, **kwargs: None
+    plain, five = (m._shared_step(batch(), "val") for m in (model, weighted))
+    torch.testing.assert_close(five, 5 * plain)
