@@ -108,7 +108,7 @@ def interpolation_costs(
     boundary_emb: Tensor,
     frames: Tensor,
     weights: Tensor | None = None,
-    chunk: int = 4096,
+    chunk: int = 1024,
 ) -> Tensor:
     """Summed pixel BCE of interpolating every in-clip segment between true boundary embeddings.
 
