@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import lightning as L
-from torch.utils.data import DataLoader, Dataset
+from torch.utils.data import DataLoader, Dataset, Subset
 from torchdata.stateful_dataloader import StatefulDataLoader
 
 from keyin.data.clips import GeneratedClips, ShardClips
@@ -22,15 +22,17 @@ def split_clips(
     """One split as a torch Dataset.
 
     Generated datasets (``train_source: generated``) make clip i of a split from the same seed
-    as ``keyin-generate`` does, so on-the-fly clips equal the written shards; ``size`` caps the
-    number of clips. Otherwise the split's shards are read from ``<data_dir>/<name>/``.
+    as ``keyin-generate`` does, so on-the-fly clips equal the written shards. Otherwise the split's
+    shards are read from ``<data_dir>/<name>/``. Either way ``size`` (None: all) caps the number of
+    clips to the split's first ``size``.
     """
     if dataset["train_source"] == "generated":
         total = dataset["splits"][split] if size is None else size
         return GeneratedClips(generator, total, split_seed(dataset["seed"], split), dataset["n_future"])
     files = split_files(Path(data_dir) / dataset["name"], split)
     image = (dataset["image_size"], dataset["image_size"], dataset["channels"])
-    return ShardClips(files, image, dataset["n_cond"], dataset["n_future"])
+    clips = ShardClips(files, image, dataset["n_cond"], dataset["n_future"])
+    return clips if size is None else Subset(clips, range(min(size, len(clips))))
 
 
 class ClipDataModule(L.LightningDataModule):

@@ -81,7 +81,7 @@ def test_resuming_with_other_settings_is_refused(root):
 
 
 @pytest.mark.parametrize("overrides,message", [
-    (("planner=surprise",), "planner=surprise is not implemented yet"),
+    (("planner=surprise", "planner.checkpoint=missing.ckpt"), "checkpoint missing.ckpt does not exist"),
     (("success_threshold=0",), "success_threshold=0 must be a positive number"),
     (("tasks=0",), "tasks=0 must be a positive integer"),
     (("data_dir=elsewhere",), "splits={planning: 240}"),

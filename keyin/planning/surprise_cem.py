@@ -1,0 +1,101 @@
+"""The Surprise baseline's high-level planner (REFERENCE §4 "For planning", paper App. 9).
+
+A CEM over SVG-FP's per-step latents z_{1:T} ∈ R^{T×Zs} (T = the model's N future frames) rolls the
+frame predictor out from the start image, feeding each predicted embedding back as the next input,
+and scores a rollout by the pixel distance between the puck in its last decoded frame and in the
+goal image: the cost and the CEM are KEYIN's (:func:`keyin.planning.latent_cem.plan_keyframes`).
+The best rollout is then decoded whole, the inference network is run on the produced sequence
+("to find the keyframes in a sequence sampled from the prior, we run the inference network on the
+produced sequence"), and its M surprise keyframes (the KL peaks of
+:func:`keyin.eval.surprise.surprise_keyframes`, with the model's shift) are the subgoals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import torch
+
+from keyin.eval.surprise import surprise_keyframes
+from keyin.lit.surprise import SurpriseModule
+from keyin.planning.cem import CEMParams
+from keyin.planning.latent_cem import plan_keyframes
+from keyin.planning.subgoals import Subgoals
+from keyin.planning.tasks import PlanningTask
+from keyin.planning.trained import TrainedPlanner, images_to_tensor, tensor_to_images
+
+
+class SurpriseRollouts:
+    """A :data:`keyin.planning.latent_cem.KeyframeRenderer` over SVG-FP prior rollouts: with
+    ``last_only`` the last frame of each rollout, else its M surprise keyframes.
+
+    Args:
+        module: a trained :class:`SurpriseModule` in eval mode.
+        start: (H, W, 3) uint8, used as every conditioning frame (pushing has one).
+    """
+
+    def __init__(self, module: SurpriseModule, start: np.ndarray) -> None:
+        self.module = module
+        frames = images_to_tensor(start, module.encoder.image_shape)  # (C, H, W)
+        self.cond_frames = frames.expand(1, module.hparams.n_cond, *frames.shape)  # (1, n_cond, C, H, W)
+        with torch.no_grad():
+            self.cond_emb = module.encoder(self.cond_frames)  # (1, n_cond, E)
+            self.cond_z, _ = module.core.posterior_stats(self.cond_emb)  # (1, n_cond, Zs): posterior means
+
+    @torch.no_grad()
+    def rollout(self, z: torch.Tensor) -> torch.Tensor:
+        """(n, T, E) predicted embeddings of the future frames, given (n, T, Zs) latents.
+
+        As in training, step t reads the embedding of frame t - 1 and z_t. Conditioning frames are
+        teacher-forced with their posterior means; after them every step reads its own prediction.
+        """
+        predictor, n = self.module.core.predictor, len(z)
+        cond_emb, cond_z = self.cond_emb.expand(n, -1, -1), self.cond_z.expand(n, -1, -1)
+        inputs = torch.cat([cond_emb[:, :-1], cond_z[:, 1:]], -1)  # (n, n_cond - 1, E + Zs)
+        state = predictor(inputs)[1] if inputs.shape[1] else None
+        previous, predicted = cond_emb[:, -1], []
+        for step in range(z.shape[1]):
+            output, state = predictor.step(torch.cat([previous, z[:, step]], -1), state)
+            previous = torch.tanh(output)
+            predicted.append(previous)
+        return torch.stack(predicted, 1)
+
+    @torch.no_grad()
+    def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
+        embeddings = self.rollout(torch.as_tensor(z, dtype=torch.float32))  # (n, T, E)
+        if last_only:
+            return tensor_to_images(torch.sigmoid(self.module.decoder(embeddings[:, -1:])))  # (n, 1, H, W, C)
+        frames = torch.sigmoid(self.module.decoder(embeddings))  # (n, T, C, H, W)
+        clips = torch.cat([self.cond_frames.expand(len(frames), -1, -1, -1, -1), frames], 1)
+        kl = self.module.surprise(clips)  # (n, n_cond + T): the inference network on the produced sequence
+        hp = self.module.hparams
+        positions = surprise_keyframes(kl, torch.full((len(frames),), frames.shape[1]), hp.n_cond, hp.n_keyframes, hp.shift)
+        return np.stack([tensor_to_images(frames[row, picked]) for row, picked in enumerate(positions)])
+
+
+@dataclass(frozen=True)
+class SurpriseSubgoals(TrainedPlanner):
+    """``planner=surprise``: the surprise keyframes of the best SVG-FP rollout are the subgoals.
+
+    Attributes:
+        samples, elites, iterations: the latent CEM's budget (KEYIN's: 200, 10, 3).
+    """
+
+    stage: ClassVar[str] = "surprise"
+
+    samples: int = 200
+    elites: int = 10
+    iterations: int = 3
+
+    def __call__(
+        self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
+    ) -> Subgoals:
+        module = self.module()
+        latent_shape = (module.hparams.n_future, module.hparams.latent_dim)
+        params = CEMParams(self.samples, self.elites, self.iterations)
+        plan = plan_keyframes(SurpriseRollouts(module, start), goal, latent_shape, params, rng)
+        return Subgoals(
+            plan.keyframes, {"plan_cost_px": plan.cost, "plan_samples_without_puck": plan.samples_without_puck}
+        )
