@@ -74,4 +74,4 @@ def test_jumpy_is_the_latent_cem_with_the_jumpy_model_and_table2_sweeps_the_lear
     assert (jumpy.controller.subgoals.model, keyin.controller.subgoals.model) == ("jumpy", "keyin")
     assert jumpy.checkpoint == "runs/multirun/pushing_table1/jumpy_seed0/checkpoints/keyframes/last.ckpt"
     assert jumpy.keyframe_samples == 200 and jumpy.keyframe_elites == 10 and jumpy.keyframe_iterations == 3
-    assert {"keyin", "jumpy", "tap"} <= set(sweep.split(","))
+    assert {"keyin", "jumpy", "surprise", "tap"} <= set(sweep.split(","))

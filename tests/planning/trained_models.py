@@ -9,6 +9,7 @@ import torch
 from keyin.lit.checkpoints import CONFIG_KEY, STAGE_KEY
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.lit.keyframes import KeyframeModule
+from keyin.lit.surprise import SurpriseModule
 from keyin.lit.tap import TAPModule
 
 SIZE = 16
@@ -43,3 +44,11 @@ def save(module: L.LightningModule, path: Path, model: str, dataset: str = "push
         CONFIG_KEY: {"model": {"name": model}, "dataset": {"name": dataset}},
     }, path)
     return str(path)
+
+
+def surprise_module() -> SurpriseModule:
+    torch.manual_seed(0)
+    return SurpriseModule(
+        **{key: value for key, value in CONV.items() if key != "mlp_hidden"}, n_cond=1, n_future=6,
+        n_keyframes=KEYFRAMES, latent_dim=2, lstm_hidden=16, predictor_layers=1, posterior_layers=1, beta=1.0, lr=1e-3,
+    )
