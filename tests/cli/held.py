@@ -5,12 +5,14 @@ Points:
 
 * ``rename:<file name>``: the file is written under its temporary name, not yet renamed;
 * ``checkpoint``: right after the first checkpoint is saved;
+* ``journal:<n>``: keyin-plan has appended n task lines to ``tasks.jsonl`` and written half of the next;
 * ``none``: not held (the test kills it when it sees fit).
 """
 
 from __future__ import annotations
 
 import importlib
+import json
 import os
 import sys
 import time
@@ -44,12 +46,31 @@ def hold_after_checkpoint() -> None:
     AtomicCheckpointIO.save_checkpoint = save
 
 
+def hold_mid_journal_line(finished: int) -> None:
+    from keyin.planning import runner
+
+    real_append, appended = runner.append_record, []
+
+    def append(path, record):
+        if len(appended) == finished:
+            line = json.dumps(dict(record), sort_keys=True)
+            with open(path, "a", encoding="utf-8") as handle:
+                handle.write(line[: len(line) // 2])
+            hang()
+        real_append(path, record)
+        appended.append(record)
+
+    runner.append_record = append
+
+
 def main(argv: list[str]) -> None:
     point, command, *overrides = argv
     if point.startswith("rename:"):
         hold_before_rename(point.partition(":")[2])
     elif point == "checkpoint":
         hold_after_checkpoint()
+    elif point.startswith("journal:"):
+        hold_mid_journal_line(int(point.partition(":")[2]))
     elif point != "none":
         raise SystemExit(f"unknown hold point {point!r}")
     sys.argv = [f"keyin-{command}", *overrides]

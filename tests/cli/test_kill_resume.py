@@ -4,6 +4,7 @@ The first run is a real process (``tests/cli/held.py``) held at a chosen point, 
 written under its temporary name but not yet renamed, and killed there with SIGKILL.
 """
 
+import json
 import os
 import shutil
 import signal
@@ -147,3 +148,26 @@ def test_train_killed_after_a_checkpoint_resumes_its_step_count_and_optimizer_st
     finished = load_checkpoint(last)
     assert finished["global_step"] == 6 and adam_steps(finished) == {6.0}
     assert sorted(p.name for p in last.parent.iterdir()) == ["last.ckpt"]
+
+
+PLAN = ("plan", "planner=random", "tasks=3", "planner.max_timesteps=3", "progress=false", "hydra.run.dir=plan")
+
+
+@pytest.mark.slow  # about 40 s: generates 3 planning tasks and imports MuJoCo twice
+def test_plan_killed_mid_line_redoes_no_finished_task_and_keeps_no_partial_line(tmp_path):
+    generated = run("generate", "dataset=pushing", "splits={planning: 3}", "progress=false", cwd=tmp_path)
+    assert generated.returncode == 0, generated.stderr
+    journal = tmp_path / "plan" / "tasks.jsonl"
+
+    def half_written(pid: int) -> bool:
+        return journal.is_file() and journal.read_text().count("\n") == 1 and not journal.read_text().endswith("\n")
+
+    assert kill_when("journal:1", PLAN, tmp_path, half_written) == -9
+    finished = journal.read_text().partition("\n")[0]
+
+    result = run(*PLAN, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    metrics = last_json(result.stdout)
+    assert (metrics["skipped"], metrics["played"], metrics["partial_lines_dropped"]) == (1, 2, 1)
+    lines = journal.read_text().splitlines()
+    assert lines[0] == finished and [json.loads(line)["task"] for line in lines] == [0, 1, 2]
