@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -98,26 +98,45 @@ class PriorKeyframes:
 
 
 @dataclass(frozen=True)
-class LatentCEMSubgoals(TrainedPlanner):
-    """``planner=keyin`` and ``planner=jumpy``: the keyframes of the best latents are the subgoals.
+class LatentCEMPlanner(TrainedPlanner):
+    """A learned planner that runs :func:`plan_keyframes` over its model's latents; subclasses say
+    how the model renders latents and what their shape is.
 
     Attributes:
         samples, elites, iterations: the latent CEM's budget (paper: 200, 10, 3).
     """
 
-    stage: ClassVar[str] = "keyframes"
-
     samples: int = 200
     elites: int = 10
     iterations: int = 3
+
+    def renderer(self, module: Any, start: np.ndarray) -> KeyframeRenderer:
+        """The model's :data:`KeyframeRenderer` from the start image (H, W, 3)."""
+        raise NotImplementedError
+
+    def latent_shape(self, module: Any) -> tuple[int, int]:
+        """The shape of one candidate."""
+        raise NotImplementedError
 
     def __call__(
         self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
     ) -> Subgoals:
         module = self.module()
-        latent_shape = (module.predictor.n_keyframes, module.predictor.latent_dim)
         params = CEMParams(self.samples, self.elites, self.iterations)
-        plan = plan_keyframes(PriorKeyframes(module, start), goal, latent_shape, params, rng)
+        plan = plan_keyframes(self.renderer(module, start), goal, self.latent_shape(module), params, rng)
         return Subgoals(
             plan.keyframes, {"plan_cost_px": plan.cost, "plan_samples_without_puck": plan.samples_without_puck}
         )
+
+
+@dataclass(frozen=True)
+class LatentCEMSubgoals(LatentCEMPlanner):
+    """``planner=keyin`` and ``planner=jumpy``: the keyframes of the best latents are the subgoals."""
+
+    stage: ClassVar[str] = "keyframes"
+
+    def renderer(self, module: KeyframeModule, start: np.ndarray) -> KeyframeRenderer:
+        return PriorKeyframes(module, start)
+
+    def latent_shape(self, module: KeyframeModule) -> tuple[int, int]:
+        return module.predictor.n_keyframes, module.predictor.latent_dim

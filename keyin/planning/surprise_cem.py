@@ -3,7 +3,7 @@
 A CEM over SVG-FP's per-step latents z_{1:T} ∈ R^{T×Zs} (T = the model's N future frames) rolls the
 frame predictor out from the start image, feeding each predicted embedding back as the next input,
 and scores a rollout by the pixel distance between the puck in its last decoded frame and in the
-goal image: the cost and the CEM are KEYIN's (:func:`keyin.planning.latent_cem.plan_keyframes`).
+goal image: the cost and the CEM are KEYIN's (:class:`keyin.planning.latent_cem.LatentCEMPlanner`).
 The best rollout is then decoded whole, the inference network is run on the produced sequence
 ("to find the keyframes in a sequence sampled from the prior, we run the inference network on the
 produced sequence"), and its M surprise keyframes (the KL peaks of
@@ -20,11 +20,8 @@ import torch
 
 from keyin.eval.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule
-from keyin.planning.cem import CEMParams
-from keyin.planning.latent_cem import plan_keyframes
-from keyin.planning.subgoals import Subgoals
-from keyin.planning.tasks import PlanningTask
-from keyin.planning.trained import TrainedPlanner, images_to_tensor, tensor_to_images
+from keyin.planning.latent_cem import LatentCEMPlanner
+from keyin.planning.trained import images_to_tensor, tensor_to_images
 
 
 class SurpriseRollouts:
@@ -76,26 +73,13 @@ class SurpriseRollouts:
 
 
 @dataclass(frozen=True)
-class SurpriseSubgoals(TrainedPlanner):
-    """``planner=surprise``: the surprise keyframes of the best SVG-FP rollout are the subgoals.
-
-    Attributes:
-        samples, elites, iterations: the latent CEM's budget (KEYIN's: 200, 10, 3).
-    """
+class SurpriseSubgoals(LatentCEMPlanner):
+    """``planner=surprise``: the surprise keyframes of the best SVG-FP rollout are the subgoals."""
 
     stage: ClassVar[str] = "surprise"
 
-    samples: int = 200
-    elites: int = 10
-    iterations: int = 3
+    def renderer(self, module: SurpriseModule, start: np.ndarray) -> SurpriseRollouts:
+        return SurpriseRollouts(module, start)
 
-    def __call__(
-        self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
-    ) -> Subgoals:
-        module = self.module()
-        latent_shape = (module.hparams.n_future, module.hparams.latent_dim)
-        params = CEMParams(self.samples, self.elites, self.iterations)
-        plan = plan_keyframes(SurpriseRollouts(module, start), goal, latent_shape, params, rng)
-        return Subgoals(
-            plan.keyframes, {"plan_cost_px": plan.cost, "plan_samples_without_puck": plan.samples_without_puck}
-        )
+    def latent_shape(self, module: SurpriseModule) -> tuple[int, int]:
+        return module.hparams.n_future, module.hparams.latent_dim
