@@ -25,7 +25,7 @@ from keyin.planning.cem import CEMParams, cem
 from keyin.planning.servo import subgoal_pixels
 from keyin.planning.subgoals import Subgoals
 from keyin.planning.tasks import PlanningTask
-from keyin.planning.trained import TrainedPlanner, images_to_tensor, tensor_to_images
+from keyin.planning.trained import TrainedPlanner, conditioning_frames, tensor_to_images
 
 # (n, L, Zk) latents and ``last_only`` -> (n, K, H, W, 3) uint8 keyframes: K = L, or 1 (K̂^L) if last_only.
 KeyframeRenderer = Callable[[np.ndarray, bool], np.ndarray]
@@ -84,10 +84,9 @@ class PriorKeyframes:
 
     def __init__(self, module: KeyframeModule, start: np.ndarray) -> None:
         self.module = module
-        frames = images_to_tensor(start, module.encoder.image_shape)  # (C, H, W)
-        n_cond = module.hparams.stage1["n_cond"]
+        frames = conditioning_frames(start, module.encoder.image_shape, module.hparams.stage1["n_cond"])
         with torch.no_grad():
-            self.cond_emb = module.encoder(frames.expand(1, n_cond, *frames.shape))  # (1, n_cond, E)
+            self.cond_emb = module.encoder(frames)  # (1, n_cond, E)
 
     @torch.no_grad()
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:

@@ -21,7 +21,7 @@ import torch
 from keyin.eval.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule
 from keyin.planning.latent_cem import LatentCEMPlanner
-from keyin.planning.trained import images_to_tensor, tensor_to_images
+from keyin.planning.trained import conditioning_frames, tensor_to_images
 
 
 class SurpriseRollouts:
@@ -35,8 +35,7 @@ class SurpriseRollouts:
 
     def __init__(self, module: SurpriseModule, start: np.ndarray) -> None:
         self.module = module
-        frames = images_to_tensor(start, module.encoder.image_shape)  # (C, H, W)
-        self.cond_frames = frames.expand(1, module.hparams.n_cond, *frames.shape)  # (1, n_cond, C, H, W)
+        self.cond_frames = conditioning_frames(start, module.encoder.image_shape, module.hparams.n_cond)
         with torch.no_grad():
             self.cond_emb = module.encoder(self.cond_frames)  # (1, n_cond, E)
             self.cond_z, _ = module.core.posterior_stats(self.cond_emb)  # (1, n_cond, Zs): posterior means

@@ -105,3 +105,10 @@ def images_to_tensor(images: np.ndarray, shape: tuple[int, int, int]) -> torch.T
 def tensor_to_images(probs: torch.Tensor) -> np.ndarray:
     """(..., C, H, W) pixel probabilities -> (..., H, W, C) uint8 images."""
     return (probs.clamp(0, 1) * 255).round().to(torch.uint8).movedim(-3, -1).cpu().numpy()
+
+
+def conditioning_frames(start: np.ndarray, shape: tuple[int, int, int], n_cond: int) -> torch.Tensor:
+    """(1, n_cond, C, H, W): the (H, W, C) uint8 start image as every conditioning frame of a model
+    whose frames are ``shape`` = (C, H, W) (pushing has one conditioning frame)."""
+    frames = images_to_tensor(start, shape)
+    return frames.expand(1, n_cond, *frames.shape)
