@@ -284,9 +284,9 @@ class KeyframeModule(L.LightningModule):
         Returns:
             ``clips`` (3·count, L, C, H, W): per clip the ground truth, the posterior-mean
             reconstruction (argmax offsets) and a prior sample, conditioning frames first;
-            ``truth`` / ``predicted``: keyframes to mark on each of those rows (discovered ones on
-            the first two, the sample's own on the third); ``offsets`` (B, M) argmax offsets of the
-            whole batch, for the histogram.
+            ``n_cond``; ``truth`` / ``predicted``: keyframes to mark on each of those rows
+            (discovered ones on the first two, the sample's own on the third); ``offsets`` (B, M)
+            argmax offsets of the whole batch and ``max_offset`` S, for the histogram.
         """
         was_training = self.training
         self.eval()
@@ -301,9 +301,11 @@ class KeyframeModule(L.LightningModule):
         videos = [clips[:count], self.argmax_video(clips, posterior)[:count], self.argmax_video(clips[:count], prior)]
         return {
             "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
+            "n_cond": self.hparams.stage1["n_cond"],
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
             "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
+            "max_offset": self.hparams.stage1["max_offset"],
         }
 
     def argmax_video(self, clips: torch.Tensor, out: dict[str, torch.Tensor]) -> torch.Tensor:

@@ -1,8 +1,10 @@
 """Pictures of a fixed validation batch at every validation, saved in the run dir and logged.
 
-For modules with ``validation_pictures`` (stage 2): ground truth, reconstruction and a prior
-sample with keyframes marked (``pictures/val_step<N>.png`` and ``.gif``) and the histogram of the
-chosen offsets (``pictures/offsets_step<N>.png``). TensorBoard and wandb loggers also receive them.
+For modules with ``validation_pictures`` (KEYIN's stage 2 and Surprise): clips with their keyframes
+marked (``pictures/val_step<N>.png`` and ``.gif``; stage 2: ground truth, reconstruction and a prior
+sample; Surprise: ground truth and its one-step predictions), and a chart of the keyframe evidence:
+stage 2's histogram of chosen offsets (``pictures/offsets_step<N>.png``), Surprise's KL curves
+(``pictures/surprise_step<N>.png``). TensorBoard and wandb loggers also receive them.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import lightning as L
 from lightning.pytorch.loggers import TensorBoardLogger, WandbLogger
 
 from keyin.viz.keyframes import save_keyframe_pictures
-from keyin.viz.report import save_offset_histogram
+from keyin.viz.report import save_offset_histogram, save_surprise_curves
 
 
 def log_picture(loggers: list, key: str, path: Path, step: int) -> None:
@@ -39,12 +41,18 @@ class ValidationPictures(L.Callback):
         shown = module.validation_pictures(batch, self.count)
         step = trainer.global_step
         videos, _ = save_keyframe_pictures(
-            self.folder, shown["clips"], module.hparams.stage1["n_cond"], shown["truth"], shown["predicted"],
-            name=f"val_step{step:06d}",
-        )
-        histogram = save_offset_histogram(
-            shown["offsets"], module.hparams.stage1["max_offset"], self.folder / f"offsets_step{step:06d}.png",
-            title=f"argmax offsets on {len(shown['offsets'])} validation clips, step {step}",
+            self.folder, shown["clips"], shown["n_cond"], shown["truth"], shown["predicted"], name=f"val_step{step:06d}"
         )
         log_picture(trainer.loggers, "val/videos", videos, step)
-        log_picture(trainer.loggers, "val/offsets", histogram, step)
+        if "offsets" in shown:
+            histogram = save_offset_histogram(
+                shown["offsets"], shown["max_offset"], self.folder / f"offsets_step{step:06d}.png",
+                title=f"argmax offsets on {len(shown['offsets'])} validation clips, step {step}",
+            )
+            log_picture(trainer.loggers, "val/offsets", histogram, step)
+        if "surprise" in shown:
+            curves = save_surprise_curves(
+                shown["surprise"], shown["n_cond"], shown["surprise_truth"], shown["surprise_predicted"],
+                self.folder / f"surprise_step{step:06d}.png", title=f"posterior KL per step, step {step}",
+            )
+            log_picture(trainer.loggers, "val/surprise", curves, step)

@@ -9,13 +9,13 @@ peaks; :mod:`keyin.eval.surprise` turns the peaks into keyframes.
 from __future__ import annotations
 
 import functools
-from typing import Callable
+from typing import Any, Callable
 
 import lightning as L
 import torch
 import torch.nn.functional as F
 
-from keyin.eval.f1 import discovery_summary
+from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.eval.surprise import surprise_keyframes
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.soft_keyframe import gaussian_kl
@@ -170,6 +170,38 @@ class SurpriseModule(L.LightningModule):
         self.train(was_training)
         shift = self.hparams.shift if shift is None else shift
         return surprise_keyframes(kl, future_length.cpu(), self.hparams.n_cond, self.hparams.n_keyframes, shift)
+
+    @torch.no_grad()
+    def validation_pictures(self, batch: dict[str, torch.Tensor], count: int) -> dict[str, Any]:
+        """What the validation pictures show for the first ``count`` clips of a batch.
+
+        Returns:
+            ``clips`` (2·count, L, C, H, W): per clip the ground truth and the one-step predictions
+            from the posterior mean (frame 0 is the given first frame); ``n_cond``; ``truth`` /
+            ``predicted``: the true and the surprise keyframes, marked on both rows;
+            ``surprise`` (count, L) the KL per step (NaN on padding) with ``surprise_truth`` /
+            ``surprise_predicted`` for the KL curves.
+        """
+        was_training = self.training
+        self.eval()
+        clips, lengths = batch["frames"][:count].to(self.device), batch["future_length"][:count]
+        embeddings = self.encoder(clips)
+        predicted, _, _ = self.core(embeddings, sample=False)
+        frames = torch.sigmoid(self.decoder(predicted.flatten(0, 1))).view_as(clips[:, 1:])
+        kl = self.surprise(clips).masked_fill(~self._valid(clips, lengths), float("nan")).cpu()
+        self.train(was_training)
+        truth = keyframe_lists(batch["keyframes"][:count])
+        discovered = self.discover(clips, lengths)
+        videos = [clips, torch.cat([clips[:, :1], frames], dim=1)]
+        return {
+            "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
+            "n_cond": self.hparams.n_cond,
+            "truth": [marks for marks in truth for _ in videos],
+            "predicted": [marks for marks in discovered for _ in videos],
+            "surprise": kl,
+            "surprise_truth": truth,
+            "surprise_predicted": discovered,
+        }
 
     def discoverers(self, name: str) -> dict[str, Callable]:
         """The method as configured, and the other index reading REFERENCE §4 asks to report."""

@@ -1,5 +1,5 @@
 """Charts: Table 1 as bars, the methods' keyframes on test clips, the histogram of chosen offsets,
-Table 2's success rate against the success threshold."""
+Surprise's KL curves, Table 2's success rate against the success threshold."""
 
 from __future__ import annotations
 
@@ -103,6 +103,36 @@ def save_offset_histogram(offsets: torch.Tensor, max_offset: int, path: Path, ti
     ax.set_ylabel("fraction of clips")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=100)
+
+
+def save_surprise_curves(
+    kl: torch.Tensor,
+    n_cond: int,
+    truth: Sequence[Sequence[int]],
+    predicted: Sequence[Sequence[int]],
+    path: Path,
+    title: str = "",
+) -> Path:
+    """The per-step KL of a few clips over their future positions, true keyframes as green and
+    the predicted (surprise) keyframes as red vertical lines; KL near 0 everywhere is the collapse.
+
+    Args:
+        kl: (K, L) KL of every clip index, conditioning frames first.
+        truth, predicted: per clip, future keyframe indices.
+    """
+    fig, axes = plt.subplots(len(kl), 1, figsize=(6, 1.3 * len(kl) + 0.5), sharex=True, squeeze=False)
+    future = np.arange(kl.shape[1]) - n_cond
+    for ax, curve, true, chosen in zip(axes[:, 0], kl, truth, predicted, strict=True):
+        ax.plot(future, curve.numpy(), color="black", marker=".", linewidth=1)
+        for position in true:
+            ax.axvline(position, color="tab:green", linewidth=2, alpha=0.5)
+        for position in chosen:
+            ax.axvline(position, color="tab:red", linestyle="--", linewidth=1)
+        ax.set_ylabel("KL", fontsize=8)
+    axes[-1, 0].set_xlabel("future position (green: true keyframe, red dashed: predicted)")
+    axes[0, 0].set_title(title, fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path, dpi=100)
 
