@@ -15,6 +15,7 @@ from typing import Callable
 
 import lightning as L
 import torch
+import torch.nn.functional as F
 from torch.utils.data import Dataset
 
 from keyin.eval.tap import save_subgoal_grid, score_whole_clips
@@ -44,6 +45,9 @@ class TAPModule(L.LightningModule):
         max_gap: the most b - a drawn in training; None: the whole valid clip.
         foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels,
             as in KEYIN's stage 1 (keyin/losses/image.py; 1: plain BCE).
+        ae_weight: weight of an auto-encoding BCE of the start and goal frames through the encoder
+            and decoder (the bottleneck skipped), as in KEYIN's stage 1 and Surprise. Without it
+            the pushing model predicts one blurred mean image for every pair (docs/baselines.md).
         The other arguments size :class:`keyin.models.TAPNetwork`; ``lr`` is Adam's.
     """
 
@@ -66,6 +70,7 @@ class TAPModule(L.LightningModule):
         max_gap: int | None = None,
         foreground_weight: float = 1.0,
         foreground_threshold: float = 0.1,
+        ae_weight: float = 0.0,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -91,6 +96,16 @@ class TAPModule(L.LightningModule):
         admissible = admissible_frames(start, goal, n_valid, frames.shape[1], self.hparams.margin)
         return min_over_time_bce(logits, frames, admissible, model_pixel_weights(frames, self.hparams))
 
+    def autoencoding_bce(self, frames: torch.Tensor, start: torch.Tensor, goal: torch.Tensor) -> torch.Tensor:
+        """(B,) BCE of the start and goal frames decoded from their own embeddings, summed over
+        pixels and both frames (pixel-weighted like the min-over-time loss)."""
+        weights = model_pixel_weights(frames, self.hparams)
+        images = torch.stack(pair_images(frames, start, goal), dim=1)  # (B, 2, C, H, W)
+        logits = self.network.decoder(self.network.encoder(images).flatten(0, 1)).view_as(images)
+        pair_weights = None if weights is None else torch.stack(pair_images(weights, start, goal), dim=1)
+        bce = F.binary_cross_entropy_with_logits(logits, images, pair_weights, reduction="none")
+        return bce.flatten(1).sum(-1)
+
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> torch.Tensor:
         frames = batch["frames"]
         n_valid = self.hparams.n_cond + batch["future_length"]
@@ -101,13 +116,17 @@ class TAPModule(L.LightningModule):
         loss, argmin = self.pair_terms(frames, n_valid, start, goal)
         relative, at_last = argmin_times(argmin, start, goal, self.hparams.margin)
         mean_loss = loss.mean()
+        terms = {
+            f"{stage}/bce_per_pixel": mean_loss / frames[0, 0].numel(),  # of the min-over-time loss
+            f"{stage}/argmin_relative": relative.mean(),  # (t - a) / (b - a) of the chosen frame
+            f"{stage}/argmin_last": at_last.float().mean(),  # chosen frame = the last admissible one
+        }
+        if self.hparams.ae_weight > 0:
+            autoencoding = self.autoencoding_bce(frames.to(self.device), start.to(self.device), goal.to(self.device))
+            terms[f"{stage}/autoencoding_per_pixel"] = autoencoding.mean() / (2 * frames[0, 0].numel())
+            mean_loss = mean_loss + self.hparams.ae_weight * autoencoding.mean()
         self.log_dict(
-            {
-                f"{stage}/loss": mean_loss,
-                f"{stage}/bce_per_pixel": mean_loss / frames[0, 0].numel(),
-                f"{stage}/argmin_relative": relative.mean(),  # (t - a) / (b - a) of the chosen frame
-                f"{stage}/argmin_last": at_last.float().mean(),  # chosen frame = the last admissible one
-            },
+            {f"{stage}/loss": mean_loss, **terms},
             prog_bar=stage == "train",
             sync_dist=stage == "val",  # under DDP: the mean over every rank's clips
         )

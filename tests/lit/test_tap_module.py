@@ -68,3 +68,24 @@ def test_pixel_weights_scale_the_min_over_time_loss():
     weighted.log_dict = model.log_dict = lambda *args, **kwargs: None
     plain, five = (m._shared_step(batch(), "val") for m in (model, weighted))
     torch.testing.assert_close(five, 5 * plain)
+
+
+def test_autoencoding_adds_the_bce_of_start_and_goal_decoded_from_their_embeddings():
+    """Validation pairs are (0, last valid): the term is the BCE of frames 0 and 8 / 0 and 4."""
+    plain, with_ae = module(), module(ae_weight=0.5)
+    for m in (plain, with_ae):
+        m.log_dict = lambda *args, **kwargs: None
+    clips = batch()
+    network = with_ae.network
+    expected = []
+    for clip, last in zip(clips["frames"], (8, 4)):
+        images = clip[[0, last]]
+        logits = network.decoder(network.encoder(images[None]).flatten(0, 1))
+        expected.append(torch.nn.functional.binary_cross_entropy_with_logits(logits, images, reduction="sum"))
+    torch.testing.assert_close(
+        with_ae.autoencoding_bce(clips["frames"], torch.tensor([0, 0]), torch.tensor([8, 4])), torch.stack(expected)
+    )
+    total = with_ae._shared_step(clips, "val")
+    torch.testing.assert_close(total, plain._shared_step(clips, "val") + 0.5 * torch.stack(expected).mean())
+    total.backward()
+    assert next(network.encoder.parameters()).grad.abs().sum() > 0
