@@ -59,5 +59,6 @@ def main() -> None:
     print("\nOracle: per clip, the k frames where the object's true path turns most, k = the clip's number"
           " of labels.")
 
+
 if __name__ == "__main__":
     main()
