@@ -41,6 +41,8 @@ def check_plan(cfg: DictConfig) -> float:
     require_positive_int(cfg.workers, "workers")
     if cfg.tasks is not None:
         require_positive_int(cfg.tasks, "tasks")
+    if isinstance(cfg.pictures, bool) or not isinstance(cfg.pictures, int) or cfg.pictures < 0:
+        raise ConfigError(f"pictures={cfg.pictures!r} must be an integer >= 0 (tasks to draw)")
     threshold = cfg.success_threshold
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 0:
         raise ConfigError(f"success_threshold={threshold!r} must be a positive number (world units)")
@@ -70,6 +72,8 @@ def plan(cfg: DictConfig) -> dict:
         generator=task_generator(generator_config),
         seed=cfg.seed,
         threshold=threshold,
+        pictures=cfg.pictures,
+        picture_dir=folder / "pictures",
     )
     records, counts = run_tasks(job, tasks, folder / "tasks.jsonl", cfg.workers, cfg.progress)
     if counts["skipped"]:

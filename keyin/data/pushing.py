@@ -152,9 +152,14 @@ class PushingGenerator:
         if self.renderer == "mujoco":
             self.environment().physics.set_wall(demo.layout.wall)
             return self.render_states(demo.states[frames])
+        return self.render_positions(demo.layout.wall, demo.puck[frames], demo.pusher[frames])
+
+    def render_positions(self, wall: np.ndarray, puck: np.ndarray, pusher: np.ndarray) -> np.ndarray:
+        """(K, H, W, 3) uint8 top-camera frames of the scene with ``wall`` (5,) and the (K, 2) puck
+        and pusher positions, by the analytic renderer (equal to MuJoCo's, docs/pushing.md)."""
         from keyin.envs.render import render_top
 
-        return render_top(self._parts()[0], demo.layout.wall, demo.puck[frames], demo.pusher[frames])
+        return render_top(self._parts()[0], wall, puck, pusher)
 
     def generate(self, index: int, seed: int) -> tuple[dict[str, np.ndarray], int]:
         """One clip, deterministic in ``seed + index``.

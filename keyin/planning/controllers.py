@@ -18,7 +18,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from keyin.planning.servo import ServoParams, execute, run_servo, subgoal_pixels
+from keyin.planning.servo import ServoParams, ServoTrajectory, execute, run_servo, subgoal_pixels
 from keyin.planning.subgoals import SubgoalPlanner
 from keyin.planning.tasks import PlanningTask
 
@@ -33,6 +33,9 @@ class Outcome:
         subgoals: subgoal images handed to the servo, the goal included (0 without a servo).
         subgoals_used: distinct subgoals the servo planned for.
         diagnostics: the high-level planner's (:class:`keyin.planning.subgoals.Subgoals`).
+        images: (K, H, W, 3) uint8 subgoal images handed to the servo, the goal last; None
+            without a servo.
+        trajectory: the servo's episode; None without a servo.
     """
 
     final_error: float
@@ -40,6 +43,8 @@ class Outcome:
     subgoals: int = 0
     subgoals_used: int = 0
     diagnostics: dict[str, float] = field(default_factory=dict)
+    images: np.ndarray | None = None
+    trajectory: ServoTrajectory | None = None
 
 
 class Controller(Protocol):
@@ -59,7 +64,8 @@ class Hierarchical:
         images = np.concatenate([planned.images, task.goal_image[None]])
         result = run_servo(env, subgoal_pixels(images), servo, rng)
         return Outcome(
-            result.final_error, len(result.subgoal), len(images), len(np.unique(result.subgoal)), planned.diagnostics
+            result.final_error, len(result.subgoal), len(images), len(np.unique(result.subgoal)), planned.diagnostics,
+            images, result,
         )
 
 

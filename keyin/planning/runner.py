@@ -22,10 +22,12 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from keyin.data.generate import exit_with_parent
 from keyin.data.pushing import PushingGenerator
 from keyin.eval.planning import successes
-from keyin.planning.controllers import Controller
+from keyin.envs.layout import Layout
+from keyin.planning.controllers import Controller, Outcome
 from keyin.planning.journal import append_record, read_journal
 from keyin.planning.servo import ServoParams
 from keyin.planning.tasks import PlanningTask, start_task
+from keyin.viz.planning import save_plan_pictures
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,8 @@ class PlanJob:
     generator: PushingGenerator  # its environment reproduces the tasks' scene
     seed: int
     threshold: float
+    pictures: int = 0  # tasks with an index below this get pictures of their episode ...
+    picture_dir: Path | None = None  # ... in this folder (keyin.viz.planning)
 
 
 def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
@@ -46,6 +50,9 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
     start = time.perf_counter()
     start_task(env, task)
     outcome = job.controller.run(env, task, job.servo, np.random.default_rng([job.seed, task.index]))
+    seconds = time.perf_counter() - start
+    if task.index < job.pictures and outcome.trajectory is not None and job.picture_dir is not None:
+        draw_episode(job, task, outcome)
     return {
         "task": task.index,
         "planner": job.planner,
@@ -56,9 +63,19 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
         "steps": outcome.steps,
         "subgoals": outcome.subgoals,
         "subgoals_used": outcome.subgoals_used,
-        "seconds": time.perf_counter() - start,
+        "seconds": seconds,
         **outcome.diagnostics,
     }
+
+
+def draw_episode(job: PlanJob, task: PlanningTask, outcome: Outcome) -> None:
+    """``task<i>.png|gif``: the subgoals over the executed episode (:mod:`keyin.viz.planning`)."""
+    trajectory = outcome.trajectory
+    wall = Layout.from_array(task.layout).wall
+    frames = job.generator.render_positions(wall, trajectory.puck, trajectory.pusher)
+    save_plan_pictures(
+        job.picture_dir, f"task{task.index:03d}", task.start_image, outcome.images, frames, trajectory.subgoal
+    )
 
 
 def run_tasks(

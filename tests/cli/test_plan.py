@@ -46,6 +46,8 @@ def test_planners_run_end_to_end(root, planner, subgoals):
     for record in journal(root / planner):
         assert record["planner"] == planner and record["steps"] == 3 and record["subgoals"] == subgoals
         assert 0 <= record["final_error"] < 2 and record["success"] == (record["final_error"] <= 0.66)
+    drawn = ["task000.gif", "task000.png", "task001.gif", "task001.png"] if subgoals else []  # servo episodes only
+    assert sorted(path.name for path in (root / planner / "pictures").glob("*")) == drawn
 
 
 def test_a_resumed_run_redoes_no_finished_task_and_drops_a_partial_line(root):
@@ -84,6 +86,7 @@ def test_resuming_with_other_settings_is_refused(root):
     (("planner=surprise", "planner.checkpoint=missing.ckpt"), "checkpoint missing.ckpt does not exist"),
     (("success_threshold=0",), "success_threshold=0 must be a positive number"),
     (("tasks=0",), "tasks=0 must be a positive integer"),
+    (("pictures=-1",), "pictures=-1 must be an integer >= 0"),
     (("data_dir=elsewhere",), "splits={planning: 240}"),
 ])
 def test_bad_inputs_give_one_error_line(root, overrides, message):

@@ -32,3 +32,24 @@ def test_gif_stacks_consecutive_clips_in_columns(tmp_path):
     centres = movie[0, cell // 2 :: cell, cell // 2 :: cell, 0].astype(int)  # (row, column)
     expected = (np.arange(6).reshape(2, 3).T * 255 / 5).round()  # clips 0-2 down column 0, 3-5 down column 1
     assert np.abs(centres - expected).max() <= 2
+
+
+def test_plan_pictures_put_each_subgoal_over_the_frame_that_last_pursued_it(tmp_path):
+    from keyin.viz.planning import last_step_per_subgoal, save_plan_pictures, with_goal
+
+    assert last_step_per_subgoal(np.array([0, 0, 2, 2, 3]), 4) == [2, None, 4, 5]
+    goal = np.zeros((4, 4, 3), np.uint8)
+    frames = np.stack([np.full((4, 4, 3), 10 * (t + 1), np.uint8) for t in range(6)])  # frame t is grey 10(t+1)
+    assert (with_goal(frames[:1], goal) == round(10 * (1 - 0.35))).all() and (with_goal(goal[None], goal) == 0).all()
+    subgoals = np.stack([np.full((4, 4, 3), 200 + k, np.uint8) for k in range(3)] + [goal])  # 3 subgoals, the goal
+    png, gif = save_plan_pictures(tmp_path, "task", frames[0], subgoals, frames, np.array([0, 0, 2, 2, 2]), gap=1)
+    canvas = iio.imread(png)[::2, ::2]  # written at twice the size
+    assert canvas.shape == (2 * 4 + 3, 5 * 5 + 1, 3)
+    top = [int(canvas[1, 1 + 5 * c, 0]) for c in range(5)]
+    bottom = [int(canvas[6, 1 + 5 * c, 0]) for c in range(5)]
+    assert top == [10, 200, 201, 202, 0]
+    # start frame; subgoal 0 last pursued at step 2 (frame 2); subgoal 1 skipped (blank); subgoal 2 at step 5;
+    # the goal never pursued: the episode's last frame (frame 5) — every executed frame blended with the goal
+    assert bottom == [round(0.65 * 10), round(0.65 * 30), 255, round(0.65 * 60), round(0.65 * 60)]
+    movie = iio.imread(gif, index=None)
+    assert movie.shape[0] == 6 and movie.shape[2] > movie.shape[1]  # a frame beside its subgoal, per step
