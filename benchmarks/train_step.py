@@ -2,6 +2,7 @@
 
     python benchmarks/train_step.py --scale cpu --steps 5
     python benchmarks/train_step.py --scale paper --steps 3
+    python benchmarks/train_step.py --scale paper --dataset pushing --device cuda
 
 Builds both LightningModules from the Hydra config exactly as keyin-train does, feeds random
 binary clips of the dataset's shape, and times ``training_step`` + backward + Adam (after one
@@ -24,14 +25,21 @@ from torch.profiler import profile
 from keyin.cli.app import CONFIG_DIR
 
 
-def random_batch(dataset, batch_size: int) -> dict[str, torch.Tensor]:
+def random_batch(dataset, batch_size: int, device: torch.device) -> dict[str, torch.Tensor]:
     length = dataset.n_cond + dataset.n_future
     shape = (batch_size, length, dataset.channels, dataset.image_size, dataset.image_size)
-    return {
+    batch = {
         "frames": (torch.rand(shape) > 0.95).float(),
         "future_length": torch.full((batch_size,), dataset.n_future),
         "keyframes": torch.zeros(batch_size, dataset.n_future, dtype=torch.bool),
     }
+    return {name: value.to(device) for name, value in batch.items()}
+
+
+def synchronize(device: torch.device) -> None:
+    """Wait for the GPU's queued work, so that a timer measures it."""
+    if device.type == "cuda":
+        torch.cuda.synchronize(device)
 
 
 def one_step(module, optimizer, batch) -> None:
@@ -41,7 +49,7 @@ def one_step(module, optimizer, batch) -> None:
     optimizer.step()
 
 
-def time_stage(module, batch, steps: int) -> tuple[list[float], str]:
+def time_stage(module, batch, steps: int, device: torch.device) -> tuple[list[float], str]:
     module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     module.train()
     if hasattr(module, "freeze_stage1"):
@@ -50,12 +58,16 @@ def time_stage(module, batch, steps: int) -> tuple[list[float], str]:
     one_step(module, optimizer, batch)  # warm-up
     times = []
     for _ in range(steps):
+        synchronize(device)
         start = time.perf_counter()
         one_step(module, optimizer, batch)
+        synchronize(device)
         times.append(time.perf_counter() - start)
     with profile() as profiler:
         one_step(module, optimizer, batch)
-    table = profiler.key_averages().table(sort_by="self_cpu_time_total", row_limit=8)
+        synchronize(device)
+    sort = "self_cuda_time_total" if device.type == "cuda" else "self_cpu_time_total"
+    table = profiler.key_averages().table(sort_by=sort, row_limit=8)
     return times, table
 
 
@@ -64,17 +76,22 @@ def main() -> None:
     parser.add_argument("--scale", default="cpu")
     parser.add_argument("--dataset", default="brownian")
     parser.add_argument("--steps", type=int, default=5)
+    parser.add_argument("--device", default="cpu", help="cpu or cuda")
     args = parser.parse_args()
+    device = torch.device(args.device)
     torch.manual_seed(0)
     with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
         cfg = compose("train", overrides=[f"scale={args.scale}", f"dataset={args.dataset}"])
     stage1 = instantiate(cfg.model.interpolator)
     stage2 = instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams))
     stage2.load_stage1(stage1.state_dict())
+    stage1.to(device)
+    stage2.to(device)
     print(f"## Training-step time, scale={args.scale}, dataset={args.dataset}\n")
     print(f"- command: `python benchmarks/train_step.py --scale {args.scale} --dataset {args.dataset} "
-          f"--steps {args.steps}`")
-    print(f"- machine: {platform.processor() or platform.machine()}, {torch.get_num_threads()} threads, "
+          f"--steps {args.steps} --device {args.device}`")
+    gpu = f", {torch.cuda.get_device_name(device)}" if device.type == "cuda" else ""
+    print(f"- machine: {platform.processor() or platform.machine()}{gpu}, {torch.get_num_threads()} threads, "
           f"torch {torch.__version__}, {date.today()}; random binary clips, Adam, after 1 warm-up step\n")
     print("| stage | clips/step | median s/step | min s/step |")
     print("|---|---|---|---|")
@@ -83,11 +100,11 @@ def main() -> None:
         ("1 (interpolator)", stage1, cfg.scale.stage1_batch_size),
         ("2 (keyframes)", stage2, cfg.scale.batch_size),
     ):
-        times, table = time_stage(module, random_batch(cfg.dataset, batch_size), args.steps)
+        times, table = time_stage(module, random_batch(cfg.dataset, batch_size, device), args.steps, device)
         print(f"| {name} | {batch_size} | {statistics.median(times):.3f} | {min(times):.3f} |")
         profiles.append((name, table))
     for name, table in profiles:
-        print(f"\nProfile of one stage-{name} step (self CPU time):\n\n```\n{table}```")
+        print(f"\nProfile of one stage-{name} step (self {device.type.upper()} time):\n\n```\n{table}```")
 
 
 if __name__ == "__main__":

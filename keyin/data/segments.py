@@ -57,7 +57,7 @@ def segment_frames(start: torch.Tensor, offset: torch.Tensor, max_offset: int) -
         frames (R, S) int64 (clamped into the segment for outputs that do not exist),
         valid (R, S) bool, True for outputs i < offset.
     """
-    steps = torch.arange(max_offset)
+    steps = torch.arange(max_offset, device=offset.device)
     valid = steps[None, :] < offset[:, None]
     frames = start[:, None] + 1 + torch.minimum(steps[None, :], offset[:, None] - 1)
     return frames, valid

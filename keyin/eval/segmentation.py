@@ -177,7 +177,7 @@ def boundary_segment_costs(scores: Tensor, max_offset: int) -> Tensor:
         (B, N, S) costs for :func:`best_segmentation`, ``inf`` where a segment leaves the clip.
     """
     batch, n_future = scores.shape
-    start, offset = segment_starts_offsets(n_future, max_offset)
+    start, offset = (index.to(scores.device) for index in segment_starts_offsets(n_future, max_offset))
     end = start + offset  # extended index of the segment's closing boundary
     per_segment = torch.where(end < n_future, -scores[:, (end - 1).clamp(max=n_future - 1)], scores.new_zeros(()))
     costs = scores.new_full((batch, n_future, max_offset), float("inf"))

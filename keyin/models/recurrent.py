@@ -116,7 +116,10 @@ class LSTMBlock(nn.Module):
         if state is None:
             state = self.initial_state(inputs.shape[0])
         projected = self.input_projection(inputs)  # (B, T, hidden)
-        hidden_outputs, state = self.lstm(projected, state)  # (B, T, hidden)
+        # cuDNN's LSTM backward needs training mode: a frozen block in eval mode that a later stage
+        # trains through (stage 2 through stage 1) runs on PyTorch's own kernels instead.
+        with torch.backends.cudnn.flags(enabled=self.training or not torch.is_grad_enabled()):
+            hidden_outputs, state = self.lstm(projected, state)  # (B, T, hidden)
         return self.output_projection(hidden_outputs), state  # (B, T, output_dim)
 
     def step(self, step_input: Tensor, state: LSTMState | None = None) -> tuple[Tensor, LSTMState]:
