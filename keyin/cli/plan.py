@@ -8,10 +8,11 @@ the last line printed) holds the mean ± std position error and the success rate
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from hydra.utils import instantiate
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
@@ -22,7 +23,8 @@ from keyin.eval.planning import planning_summary
 from keyin.planning.journal import claim_run_dir
 from keyin.planning.runner import PlanJob, run_tasks
 from keyin.planning.servo import ServoParams
-from keyin.planning.tasks import read_tasks, task_generator
+from keyin.planning.tasks import PlanningTask, read_tasks, task_generator
+
 
 def task_files(cfg: DictConfig) -> list[Path]:
     if cfg.data is not None:
@@ -35,14 +37,38 @@ def task_files(cfg: DictConfig) -> list[Path]:
         ) from None
 
 
+def task_indices(value: Any, key: str) -> frozenset[int] | None:
+    """``tasks``/``pictures``: an integer n (the tasks 0 … n-1) or a list of task indices; None for
+    ``tasks=null`` (all)."""
+    if value is None and key == "tasks":
+        return None
+    if isinstance(value, int) and not isinstance(value, bool) and value >= 0:
+        return frozenset(range(value))
+    items = list(value) if isinstance(value, (list, ListConfig)) else None
+    if items is None or not all(isinstance(i, int) and not isinstance(i, bool) and i >= 0 for i in items):
+        raise ConfigError(f"{key}={value!r} must be an integer n >= 0 (the tasks 0 … n-1) or a list of task indices, "
+                          f"e.g. '{key}=[6,10]'")
+    return frozenset(items)
+
+
+def select_tasks(tasks: list[PlanningTask], value: Any) -> list[PlanningTask]:
+    """``tasks``: null (all), n (the first n) or a list of task indices, each of which must exist."""
+    if value is None or isinstance(value, int):
+        return tasks[:value]
+    wanted = task_indices(value, "tasks")
+    missing = sorted(wanted - {task.index for task in tasks})
+    if missing:
+        raise ConfigError(f"tasks: no task with index {missing} in the planning files ({len(tasks)} tasks)")
+    return [task for task in tasks if task.index in wanted]
+
+
 def check_plan(cfg: DictConfig) -> float:
     """The checks beyond the common ones; returns the success threshold."""
     check_common(cfg)
     require_positive_int(cfg.workers, "workers")
-    if cfg.tasks is not None:
-        require_positive_int(cfg.tasks, "tasks")
-    if isinstance(cfg.pictures, bool) or not isinstance(cfg.pictures, int) or cfg.pictures < 0:
-        raise ConfigError(f"pictures={cfg.pictures!r} must be an integer >= 0 (tasks to draw)")
+    if task_indices(cfg.tasks, "tasks") == frozenset():
+        raise ConfigError(f"tasks={cfg.tasks!r} plays nothing; give n >= 1, a list of task indices or null (all)")
+    task_indices(cfg.pictures, "pictures")
     threshold = cfg.success_threshold
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 0:
         raise ConfigError(f"success_threshold={threshold!r} must be a positive number (world units)")
@@ -55,7 +81,7 @@ def plan(cfg: DictConfig) -> dict:
     controller = instantiate(cfg.planner.controller)  # a learned planner loads (and checks) its checkpoint
     files = task_files(cfg)
     tasks, generator_config = read_tasks(files)
-    tasks = tasks[: cfg.tasks]
+    tasks = select_tasks(tasks, cfg.tasks)
     folder = run_dir()
     checkpoint = cfg.planner.get("checkpoint")
     claim_run_dir(folder, {
@@ -72,7 +98,7 @@ def plan(cfg: DictConfig) -> dict:
         generator=task_generator(generator_config),
         seed=cfg.seed,
         threshold=threshold,
-        pictures=cfg.pictures,
+        pictures=task_indices(cfg.pictures, "pictures"),
         picture_dir=folder / "pictures",
     )
     records, counts = run_tasks(job, tasks, folder / "tasks.jsonl", cfg.workers, cfg.progress)

@@ -24,6 +24,7 @@ from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
 from keyin.eval.planning_report import (
     collect_planning,
+    outcome_markdown,
     planning_csv,
     planning_markdown,
     summarise_planning,
@@ -101,11 +102,19 @@ def planning_table(sweep: Path, out: Path, threshold: float | None) -> list[Path
         f"over tasks; success = final error ≤ {threshold:g}. The paper states no threshold (REFERENCE §5.2): "
         f"compare the curve in table2_success.png.\n\n"
     )
+    outcomes = outcome_markdown(rows)
+    if outcomes:
+        outcomes = (
+            "\n## How the tasks ended\n\nEvery goal lies across the wall from its start: `untouched` never moved the "
+            "puck, `reached then lost` came within the threshold and left, `not crossed` ended on the start's side "
+            "of the wall's centre line, `crossed missed` crossed it and stopped away from the goal.\n\n" + outcomes
+        )
+    text = header + planning_markdown(rows, threshold) + outcomes
     written = [out / "table2.md", out / "table2.csv"]
-    atomic_write_text(written[0], header + planning_markdown(rows, threshold))
+    atomic_write_text(written[0], text)
     atomic_write_text(written[1], planning_csv(rows, threshold))
     written.append(save_success_curves(rows, threshold, out / "table2_success.png"))
-    print(header + planning_markdown(rows, threshold))
+    print(text)
     return written
 
 

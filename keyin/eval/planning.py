@@ -9,6 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from keyin.envs.geometry import shortest_path_length, to_wall_frame
+
+# How a task ended (:func:`episode_outcome`), in the order they are tested.
+OUTCOMES = ("success", "untouched", "reached_then_lost", "not_crossed", "crossed_missed")
+UNTOUCHED_BELOW = 0.05  # world units: a puck that never left this disc round its start was not pushed
+
 
 def successes(errors: np.ndarray, threshold: float) -> np.ndarray:
     """(n,) bool: the final error is within ``threshold``."""
@@ -33,3 +39,38 @@ def planning_summary(errors: np.ndarray, initial: np.ndarray, threshold: float) 
         "relative_error_mean": float((errors / initial).mean()),
         "initial_distance_mean": float(initial.mean()),
     }
+
+
+def episode_outcome(
+    puck: np.ndarray, wall: np.ndarray, goal: np.ndarray, inflate: float, threshold: float
+) -> dict[str, float | bool | str]:
+    """How an episode ended, read from the puck's path.
+
+    Every task's goal lies across the wall from the puck's start (:mod:`keyin.envs.layout`), so a
+    failure either never moved the puck (``untouched``), came within ``threshold`` of the goal and
+    left it again (``reached_then_lost``), ended on the start's side of the wall's centre line
+    (``not_crossed``) or crossed it and stopped away from the goal (``crossed_missed``).
+
+    Args:
+        puck: (T + 1, 2) world positions of the puck, the start first.
+        wall: (5,) the task's wall; goal: (2,) its goal.
+        inflate: the puck radius (the error is the shortest path round the inflated wall).
+        threshold: the success threshold (world units).
+    Returns:
+        ``outcome`` (one of :data:`OUTCOMES`), ``closest_error`` (the smallest error along the
+        episode), ``puck_moved`` (farthest distance of the puck from its start) and ``crossed_wall``.
+    """
+    puck = np.asarray(puck, dtype=np.float64)
+    errors = np.array([shortest_path_length(point, goal, wall, inflate) for point in puck])
+    moved = float(np.linalg.norm(puck - puck[0], axis=1).max())
+    start_side, final_side = np.sign(to_wall_frame(puck[[0, -1]], wall)[:, 1])
+    crossed = bool(start_side != final_side)
+    if errors[-1] <= threshold:
+        outcome = "success"
+    elif moved < UNTOUCHED_BELOW:
+        outcome = "untouched"
+    elif errors.min() <= threshold:
+        outcome = "reached_then_lost"
+    else:
+        outcome = "crossed_missed" if crossed else "not_crossed"
+    return {"outcome": outcome, "closest_error": float(errors.min()), "puck_moved": moved, "crossed_wall": crossed}

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import csv
 import io
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from keyin.eval.planning import planning_summary
+from keyin.eval.planning import OUTCOMES, planning_summary
 from keyin.eval.report import group_by_seed, is_planning, read_metrics
 from keyin.planning.journal import parse_journal
 
@@ -31,6 +32,7 @@ PAPER_TABLE2 = {
     "keyin": (0.50, 0.26, 64.2),
 }
 PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
+NOT_RECORDED = "not recorded"
 
 
 @dataclass
@@ -41,6 +43,8 @@ class PlanningRow:
         errors, initial: (n,) final and initial shortest-path distances of its tasks.
         summary: :func:`keyin.eval.planning.planning_summary` of them.
         paper: the paper's (error mean, error std, success %) or None.
+        outcomes: how many of its tasks ended in each :data:`keyin.eval.planning.OUTCOMES` (servo
+            episodes of a keyin-plan that records them), ``not recorded`` for the others.
     """
 
     planner: str
@@ -50,6 +54,7 @@ class PlanningRow:
     steps_mean: float
     summary: dict[str, float | int]
     paper: tuple[float, float, float | None] | None
+    outcomes: dict[str, int]
 
 
 def collect_planning(root: Path) -> list[dict[str, Any]]:
@@ -112,6 +117,7 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
                 steps_mean=float(np.mean([task["steps"] for task in tasks])),
                 summary=planning_summary(errors, initial, threshold),
                 paper=PAPER_TABLE2.get(planner),
+                outcomes=dict(Counter(task.get("outcome", NOT_RECORDED) for task in tasks)),
             )
         )
     return rows
@@ -133,6 +139,19 @@ def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
             f"{100 * s['success_rate']:.1f} % | {paper_success} | {s['relative_error_mean']:.2f} | "
             f"{row.steps_mean:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
         )
+    return "\n".join(lines) + "\n"
+
+
+def outcome_markdown(rows: list[PlanningRow]) -> str:
+    """How each servo planner's tasks ended (:func:`keyin.eval.planning.episode_outcome`, at the
+    runs' own threshold); empty when no row recorded it."""
+    rows = [row for row in rows if set(row.outcomes) - {NOT_RECORDED}]
+    if not rows:
+        return ""
+    columns = [*OUTCOMES, NOT_RECORDED]
+    lines = ["| planner | " + " | ".join(c.replace("_", " ") for c in columns) + " |",
+             "|---" * (len(columns) + 1) + "|"]
+    lines += [f"| {row.planner} | " + " | ".join(str(row.outcomes.get(c, 0)) for c in columns) + " |" for row in rows]
     return "\n".join(lines) + "\n"
 
 

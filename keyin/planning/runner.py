@@ -21,7 +21,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 
 from keyin.data.generate import exit_with_parent
 from keyin.data.pushing import PushingGenerator
-from keyin.eval.planning import successes
+from keyin.eval.planning import episode_outcome, successes
 from keyin.envs.layout import Layout
 from keyin.planning.controllers import Controller, Outcome
 from keyin.planning.journal import append_record, read_journal
@@ -40,7 +40,7 @@ class PlanJob:
     generator: PushingGenerator  # its environment reproduces the tasks' scene
     seed: int
     threshold: float
-    pictures: int = 0  # tasks with an index below this get pictures of their episode ...
+    pictures: frozenset[int] = frozenset()  # the indices of the tasks that get pictures of their episode ...
     picture_dir: Path | None = None  # ... in this folder (keyin.viz.planning)
 
 
@@ -51,8 +51,14 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
     start_task(env, task)
     outcome = job.controller.run(env, task, job.servo, np.random.default_rng([job.seed, task.index]))
     seconds = time.perf_counter() - start
-    if task.index < job.pictures and outcome.trajectory is not None and job.picture_dir is not None:
-        draw_episode(job, task, outcome)
+    how = {}
+    if outcome.trajectory is not None:
+        layout = Layout.from_array(task.layout)
+        how = episode_outcome(
+            outcome.trajectory.puck, layout.wall, layout.goal, env.task.scene.puck_radius, job.threshold
+        )
+        if task.index in job.pictures and job.picture_dir is not None:
+            draw_episode(job, task, outcome)
     return {
         "task": task.index,
         "planner": job.planner,
@@ -64,6 +70,7 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
         "subgoals": outcome.subgoals,
         "subgoals_used": outcome.subgoals_used,
         "seconds": seconds,
+        **how,
         **outcome.diagnostics,
     }
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from keyin.data.hdf5 import load_arrays, split_files
+from keyin.eval.planning import OUTCOMES
 from tests.cli.runner import error_line, last_json, run
 
 TINY = ("planner.servo_samples=16", "planner.elites=4", "planner.cem_iterations=1", "planner.max_timesteps=3",
@@ -46,8 +47,18 @@ def test_planners_run_end_to_end(root, planner, subgoals):
     for record in journal(root / planner):
         assert record["planner"] == planner and record["steps"] == 3 and record["subgoals"] == subgoals
         assert 0 <= record["final_error"] < 2 and record["success"] == (record["final_error"] <= 0.66)
+        if subgoals:  # a servo episode says how it ended
+            assert record["outcome"] in OUTCOMES and (record["outcome"] == "success") == record["success"]
+            assert record["closest_error"] <= record["final_error"] and record["puck_moved"] >= 0
     drawn = ["task000.gif", "task000.png", "task001.gif", "task001.png"] if subgoals else []  # servo episodes only
     assert sorted(path.name for path in (root / planner / "pictures").glob("*")) == drawn
+
+
+def test_a_list_of_tasks_replays_those_tasks_with_their_pictures(root):
+    result = run("plan", "planner=no_subgoals", "hydra.run.dir=chosen", "tasks=[2,0]", "pictures=[2]", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr
+    assert sorted(r["task"] for r in journal(root / "chosen")) == [0, 2]
+    assert sorted(path.name for path in (root / "chosen" / "pictures").glob("*")) == ["task002.gif", "task002.png"]
 
 
 def test_a_resumed_run_redoes_no_finished_task_and_drops_a_partial_line(root):
@@ -85,8 +96,10 @@ def test_resuming_with_other_settings_is_refused(root):
 @pytest.mark.parametrize("overrides,message", [
     (("planner=surprise", "planner.checkpoint=missing.ckpt"), "checkpoint missing.ckpt does not exist"),
     (("success_threshold=0",), "success_threshold=0 must be a positive number"),
-    (("tasks=0",), "tasks=0 must be a positive integer"),
-    (("pictures=-1",), "pictures=-1 must be an integer >= 0"),
+    (("tasks=0",), "tasks=0 plays nothing"),
+    (("tasks=[2,999]",), "no task with index [999]"),
+    (("pictures=-1",), "pictures=-1 must be an integer n >= 0"),
+    (("pictures=[a]",), "or a list of task indices"),
     (("data_dir=elsewhere",), "splits={planning: 240}"),
 ])
 def test_bad_inputs_give_one_error_line(root, overrides, message):

@@ -7,14 +7,22 @@ import pytest
 
 from keyin.cli import report
 from keyin.eval.planning import planning_summary, success_curve
-from keyin.eval.planning_report import collect_planning, planning_csv, planning_markdown, summarise_planning
+from keyin.eval.planning_report import (
+    collect_planning,
+    outcome_markdown,
+    planning_csv,
+    planning_markdown,
+    summarise_planning,
+)
 
 
-def write_job(root, planner, seed, errors, threshold=0.66, extra_lines=""):
+def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None):
     job = root / f"{planner}_seed{seed}"
     job.mkdir(parents=True)
     records = [dict(task=i, planner=planner, seed=seed, final_error=e, initial_distance=1.25, steps=10, subgoals=1,
                     subgoals_used=1, success=e <= threshold, seconds=1.0) for i, e in enumerate(errors)]
+    for record, outcome in zip(records, outcomes or []):
+        record["outcome"] = outcome
     (job / "tasks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in reversed(records)) + extra_lines)
     metrics = dict(planning_summary(np.array(errors), np.full(len(errors), 1.25), threshold), planner=planner,
                    seed=seed, dataset="pushing", success_threshold=threshold)
@@ -24,8 +32,8 @@ def write_job(root, planner, seed, errors, threshold=0.66, extra_lines=""):
 @pytest.fixture
 def sweep(tmp_path):
     write_job(tmp_path, "no_subgoals", 0, [0.2, 1.0])
-    write_job(tmp_path, "no_subgoals", 1, [0.6, 1.2])
-    write_job(tmp_path, "demo_subgoals", 0, [0.1, 0.1])
+    write_job(tmp_path, "no_subgoals", 1, [0.6, 1.2], outcomes=["success", "not_crossed"])
+    write_job(tmp_path, "demo_subgoals", 0, [0.1, 0.1], outcomes=["success", "success"])
     write_job(tmp_path, "initial", 0, [1.25, 1.25], extra_lines='{"task": 9, "final')  # a later run, killed
     return tmp_path
 
@@ -54,9 +62,20 @@ def test_rows_pool_the_tasks_of_every_seed_in_the_papers_order(sweep):
     assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.9,0.14,15.0")
 
 
+def test_the_outcome_counts_list_the_rows_that_recorded_them(sweep):
+    rows = summarise_planning(collect_planning(sweep), 0.66)
+    assert rows[1].outcomes == {"not recorded": 2, "success": 1, "not_crossed": 1}
+    table = outcome_markdown(rows).splitlines()
+    assert table[0] == ("| planner | success | untouched | reached then lost | not crossed | crossed missed | "
+                        "not recorded |")
+    assert table[2:] == ["| no_subgoals | 1 | 0 | 0 | 1 | 0 | 2 |", "| demo_subgoals | 2 | 0 | 0 | 0 | 0 | 0 |"]
+    assert outcome_markdown(rows[:1]) == ""  # Initial never runs the servo
+
+
 def test_the_report_writes_table_2_and_the_curve(sweep, capsys):
     report.main([str(sweep)])
-    assert "| no_subgoals | 0.75 ± 0.38 |" in (sweep / "report" / "table2.md").read_text()
+    text = (sweep / "report" / "table2.md").read_text()
+    assert "| no_subgoals | 0.75 ± 0.38 |" in text and "## How the tasks ended" in text
     assert (sweep / "report" / "table2.csv").is_file() and (sweep / "report" / "table2_success.png").stat().st_size > 0
     assert not (sweep / "report" / "table1.md").exists()
     report.main([str(sweep), "--threshold", "1.1", "--out", str(sweep / "loose")])
