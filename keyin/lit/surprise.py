@@ -47,6 +47,9 @@ class SurpriseModule(L.LightningModule):
             first; even a small weight can collapse the posterior while it cannot).
         foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels,
             as in KEYIN's stage 1 (keyin/losses/image.py; 1: plain BCE).
+        skips: SVG's skip connections: every frame is decoded with the encoder features of the
+            clip's last conditioning frame, so the predictor need not carry the static scene
+            (False: KEYIN's decoder, no skips).
     """
 
     stage = "surprise"
@@ -74,6 +77,7 @@ class SurpriseModule(L.LightningModule):
         beta_delay: int = 0,
         foreground_weight: float = 1.0,
         foreground_threshold: float = 0.1,
+        skips: bool = False,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -82,13 +86,29 @@ class SurpriseModule(L.LightningModule):
             coord_channels=coord_channels, norm=norm,
         )
         self.encoder = ConvEncoder(**conv)
-        self.decoder = ConvDecoder(**conv)
+        self.decoder = ConvDecoder(**conv, skips=skips)
         self.core = SVGCore(embed_dim, latent_dim, lstm_hidden, predictor_layers, posterior_layers)
 
     def _valid(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
         """(B, L) True for the conditioning frames and the valid future frames."""
         steps = torch.arange(clips.shape[1], device=clips.device)
         return steps[None] < self.hparams.n_cond + future_length.to(clips.device)[:, None]
+
+    def encode(self, clips: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor] | None]:
+        """(B, L, E) embeddings of (B, L, C, H, W) clips, and the decoder's context: with skips the
+        encoder features of each clip's last conditioning frame (B, F·2^i, h_i, h_i), else None."""
+        if not self.hparams.skips:
+            return self.encoder(clips), None
+        embeddings, skips = self.encoder.embed_with_skips(clips)
+        return embeddings, [features[:, self.hparams.n_cond - 1] for features in skips]
+
+    def decode(self, embeddings: torch.Tensor, context: list[torch.Tensor] | None) -> torch.Tensor:
+        """(B, T, C, H, W) logits of (B, T, E) embeddings with the context of :meth:`encode`
+        (its batch B or 1, broadcast over B and T)."""
+        if context is None:
+            return self.decoder(embeddings)
+        batch, steps = embeddings.shape[:2]
+        return self.decoder(embeddings, [features.unsqueeze(1).expand(batch, steps, -1, -1, -1) for features in context])
 
     def _terms(
         self, batch: dict[str, torch.Tensor], sample: bool = True
@@ -99,10 +119,10 @@ class SurpriseModule(L.LightningModule):
         clips = batch["frames"]
         valid_all = self._valid(clips, batch["future_length"])
         valid = valid_all[:, 1:]
-        embeddings = self.encoder(clips)
+        embeddings, context = self.encode(clips)
         predicted, mu, log_sigma = self.core(embeddings, sample=sample)
         weights = model_pixel_weights(clips, self.hparams)
-        logits = self.decoder(predicted.flatten(0, 1)).view_as(clips[:, 1:])
+        logits = self.decode(predicted, context)
         bce = F.binary_cross_entropy_with_logits(
             logits, clips[:, 1:], None if weights is None else weights[:, 1:], reduction="none"
         ).flatten(2).sum(-1)
@@ -110,7 +130,7 @@ class SurpriseModule(L.LightningModule):
         autoencoding = clips.new_zeros(())
         if self.hparams.ae_weight > 0:
             autoencoding = F.binary_cross_entropy_with_logits(
-                self.decoder(embeddings[valid_all]), clips[valid_all],
+                self.decode(embeddings, context)[valid_all], clips[valid_all],
                 None if weights is None else weights[valid_all], reduction="sum",
             )
         return bce * valid, kl * valid, valid, autoencoding
@@ -185,9 +205,9 @@ class SurpriseModule(L.LightningModule):
         was_training = self.training
         self.eval()
         clips, lengths = batch["frames"][:count].to(self.device), batch["future_length"][:count]
-        embeddings = self.encoder(clips)
+        embeddings, context = self.encode(clips)
         predicted, _, _ = self.core(embeddings, sample=False)
-        frames = torch.sigmoid(self.decoder(predicted.flatten(0, 1))).view_as(clips[:, 1:])
+        frames = torch.sigmoid(self.decode(predicted, context))
         kl = self.surprise(clips).masked_fill(~self._valid(clips, lengths), float("nan")).cpu()
         self.train(was_training)
         truth = keyframe_lists(batch["keyframes"][:count])

@@ -128,15 +128,30 @@ class ConvEncoder(nn.Module):
         Returns:
             (..., E) in (-1, 1).
         """
+        return self.embed_with_skips(frames)[0]
+
+    def embed_with_skips(self, frames: Tensor) -> tuple[Tensor, list[Tensor]]:
+        """Embed frames and keep every block's output, for a decoder with skip connections.
+
+        Args:
+            frames: (..., C, H, W) in [0, 1]; any number of leading dims.
+        Returns:
+            (..., E) embeddings in (-1, 1), and per block i the features (..., F·2^i, H/2^(i+1), H/2^(i+1)),
+            finest first.
+        """
         if tuple(frames.shape[-3:]) != self.image_shape:
             raise ValueError(f"expected frames (..., {self.image_shape}), got {tuple(frames.shape)}")
         leading_shape = frames.shape[:-3]
-        images = frames.reshape(-1, *self.image_shape)  # (B', C, H, W)
+        features = frames.reshape(-1, *self.image_shape)  # (B', C, H, W)
         if self.coord_channels:
-            images = with_coordinates(images)  # (B', C+2, H, W)
-        features = self.blocks(images)  # (B', F·2^(depth-1), 4, 4)
-        embeddings = torch.tanh(self.head(features)).flatten(1)  # (B', E)
-        return embeddings.reshape(*leading_shape, -1)
+            features = with_coordinates(features)  # (B', C+2, H, W)
+        skips = []
+        for layer in self.blocks:
+            features = layer(features)
+            if isinstance(layer, nn.LeakyReLU):  # the end of a block
+                skips.append(features.reshape(*leading_shape, *features.shape[1:]))
+        embeddings = torch.tanh(self.head(features)).flatten(1)  # (B', E) from (B', F·2^(depth-1), 4, 4)
+        return embeddings.reshape(*leading_shape, -1), skips
 
 
 class ConvDecoder(nn.Module):
@@ -156,6 +171,8 @@ class ConvDecoder(nn.Module):
         coord_channels: concatenate x/y coordinate planes of the current resolution before each
             stride-2 upsampling conv.
         norm: "batch", "group" or "none".
+        skips: each upsampling conv also reads the encoder's features of the same resolution
+            (SVG's skip connections: :meth:`ConvEncoder.embed_with_skips` of a context frame).
     """
 
     def __init__(
@@ -166,11 +183,13 @@ class ConvDecoder(nn.Module):
         embed_dim: int,
         coord_channels: bool = False,
         norm: str = "batch",
+        skips: bool = False,
     ) -> None:
         super().__init__()
         _check_norm(norm)
         depth = conv_depth(image_size)
         self.coord_channels = coord_channels
+        self.skips = skips
         top_channels = width * 2 ** (depth - 1)
         self.head = nn.Sequential(
             nn.ConvTranspose2d(embed_dim, top_channels, 4),
@@ -183,27 +202,36 @@ class ConvDecoder(nn.Module):
         for index in reversed(range(depth)):
             is_last = index == 0
             out_channels = channels if is_last else width * 2 ** (index - 1)
+            skip_channels = width * 2**index if skips else 0  # the encoder block of this resolution
             layers: list[nn.Module] = [
-                nn.ConvTranspose2d(in_channels + extra_channels, out_channels, 4, stride=2, padding=1)
+                nn.ConvTranspose2d(in_channels + extra_channels + skip_channels, out_channels, 4, stride=2, padding=1)
             ]
             if not is_last:
                 layers += [normalization(norm, out_channels), nn.LeakyReLU(0.2)]
             self.upsampling.append(nn.Sequential(*layers))
             in_channels = out_channels
 
-    def forward(self, embeddings: Tensor) -> Tensor:
+    def forward(self, embeddings: Tensor, skips: list[Tensor] | None = None) -> Tensor:
         """Decode embeddings to logits.
 
         Args:
             embeddings: (..., E); any number of leading dims.
+            skips: with ``skips=True`` only, and then required: the encoder's block features
+                (..., F·2^i, h_i, h_i), finest first, with the embeddings' leading dims.
         Returns:
             (..., C, H, W) logits; `torch.sigmoid` of them are pixel probabilities.
         """
+        if self.skips != (skips is not None):
+            raise ValueError(f"this decoder was built with skips={self.skips}; pass skips "
+                             f"{'from ConvEncoder.embed_with_skips' if self.skips else 'None'}")
         leading_shape = embeddings.shape[:-1]
         features = embeddings.reshape(-1, embeddings.shape[-1], 1, 1)  # (B', E, 1, 1)
         features = self.head(features)  # (B', F·2^(depth-1), 4, 4)
-        for block in self.upsampling:
+        coarsest_first = [] if skips is None else [skip.reshape(-1, *skip.shape[-3:]) for skip in reversed(skips)]
+        for index, block in enumerate(self.upsampling):
             if self.coord_channels:
                 features = with_coordinates(features)  # (B', channels + 2, h, h)
+            if coarsest_first:
+                features = torch.cat([features, coarsest_first[index]], dim=1)  # (B', ... + F·2^i, h, h)
             features = block(features)  # (B', channels / 2 or C, 2h, 2h)
         return features.reshape(*leading_shape, *features.shape[1:])

@@ -37,7 +37,7 @@ class SurpriseRollouts:
         self.module = module
         self.cond_frames = conditioning_frames(start, module.encoder.image_shape, module.hparams.n_cond)
         with torch.no_grad():
-            self.cond_emb = module.encoder(self.cond_frames)  # (1, n_cond, E)
+            self.cond_emb, self.context = module.encode(self.cond_frames)  # (1, n_cond, E), skips of the start
             self.cond_z, _ = module.core.posterior_stats(self.cond_emb)  # (1, n_cond, Zs): posterior means
 
     @torch.no_grad()
@@ -62,8 +62,8 @@ class SurpriseRollouts:
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
         embeddings = self.rollout(torch.as_tensor(z, dtype=torch.float32))  # (n, T, E)
         if last_only:
-            return tensor_to_images(torch.sigmoid(self.module.decoder(embeddings[:, -1:])))  # (n, 1, H, W, C)
-        frames = torch.sigmoid(self.module.decoder(embeddings))  # (n, T, C, H, W)
+            return tensor_to_images(torch.sigmoid(self.module.decode(embeddings[:, -1:], self.context)))  # (n, 1, H, W, C)
+        frames = torch.sigmoid(self.module.decode(embeddings, self.context))  # (n, T, C, H, W)
         clips = torch.cat([self.cond_frames.expand(len(frames), -1, -1, -1, -1), frames], 1)
         kl = self.module.surprise(clips)  # (n, n_cond + T): the inference network on the produced sequence
         hp = self.module.hparams

@@ -61,3 +61,34 @@ def test_pixel_weights_scale_the_prediction_and_autoencoding_bce():
     torch.testing.assert_close(bce5, 5 * bce)
     torch.testing.assert_close(ae5, 5 * ae)
     torch.testing.assert_close(kl5, kl)
+
+
+def test_with_skips_every_frame_is_decoded_with_the_last_conditioning_frames_features():
+    model = module(skips=True).eval()
+    frames = torch.rand(2, 8, 1, 8, 8)
+    embeddings, context = model.encode(frames)
+    _, skips = model.encoder.embed_with_skips(frames)
+    for features, all_frames in zip(context, skips):
+        torch.testing.assert_close(features, all_frames[:, 1])  # n_cond = 2: frame 1
+    earlier = frames.clone()
+    earlier[:, 0] = torch.rand(2, 1, 8, 8)  # another first frame: same context
+    for features, again in zip(context, model.encode(earlier)[1]):
+        torch.testing.assert_close(features, again)
+    one_context = [features[:1] for features in context]  # batch 1 broadcasts over the embeddings
+    torch.testing.assert_close(model.decode(embeddings, one_context), model.decode(embeddings, [
+        features.expand(2, -1, -1, -1) for features in one_context]))
+    assert model.decode(embeddings, context).shape == frames.shape
+    assert module(skips=False).encode(frames)[1] is None
+
+
+def test_with_skips_padded_frames_still_add_nothing_to_the_loss():
+    model = module(skips=True, ae_weight=1.0)
+    frames, lengths = torch.rand(2, 8, 1, 8, 8), torch.tensor([6, 3])
+    torch.manual_seed(1)
+    bce, _, _, ae = model._terms({"frames": frames, "future_length": lengths})
+    changed = frames.clone()
+    changed[1, 5:] = torch.rand(3, 1, 8, 8)
+    torch.manual_seed(1)
+    bce_changed, _, _, ae_changed = model._terms({"frames": changed, "future_length": lengths})
+    torch.testing.assert_close(bce_changed, bce)
+    torch.testing.assert_close(ae_changed, ae)

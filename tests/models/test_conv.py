@@ -157,3 +157,50 @@ def test_smallest_image_size_has_one_block():
     decoder = ConvDecoder(8, 1, WIDTH, EMBED_DIM, coord_channels=True)
 
     assert decoder(encoder(torch.rand(2, 1, 8, 8))).shape == (2, 1, 8, 8)
+
+
+@pytest.mark.parametrize("image_size, channels, depth", IMAGE_CONFIGS)
+def test_skip_features_are_each_blocks_output_finest_first(image_size, channels, depth):
+    torch.manual_seed(0)
+    encoder = ConvEncoder(image_size, channels, WIDTH, EMBED_DIM, coord_channels=True, norm="group")
+    frames = torch.rand(2, 3, channels, image_size, image_size)
+    embeddings, skips = encoder.embed_with_skips(frames)
+    torch.testing.assert_close(embeddings, encoder(frames))
+    assert [tuple(skip.shape) for skip in skips] == [
+        (2, 3, WIDTH * 2**index, image_size // 2 ** (index + 1), image_size // 2 ** (index + 1)) for index in range(depth)
+    ]
+
+
+@pytest.mark.parametrize("image_size, channels, depth", IMAGE_CONFIGS)
+def test_a_skip_decoder_reads_the_encoder_features_of_each_resolution(image_size, channels, depth):
+    torch.manual_seed(0)
+    encoder = ConvEncoder(image_size, channels, WIDTH, EMBED_DIM, norm="none")
+    decoder = ConvDecoder(image_size, channels, WIDTH, EMBED_DIM, norm="none", skips=True)
+    frames = torch.rand(2, 3, channels, image_size, image_size)
+    embeddings, skips = encoder.embed_with_skips(frames)
+
+    logits = decoder(embeddings, skips)
+
+    assert logits.shape == frames.shape
+    for index in range(depth):  # every level's features reach the output
+        changed = [skip.clone() for skip in skips]
+        changed[index] = changed[index] + 1.0
+        assert not torch.allclose(decoder(embeddings, changed), logits)
+    frame = decoder(embeddings[1, 2], [skip[1, 2] for skip in skips])  # no leading dims
+    torch.testing.assert_close(frame, logits[1, 2])
+    plain = ConvDecoder(image_size, channels, WIDTH, EMBED_DIM, norm="none").state_dict()
+    with_skips = decoder.state_dict()
+    widened = {name for name in plain if plain[name].shape != with_skips[name].shape}
+    assert widened == {f"upsampling.{index}.0.weight" for index in range(depth)}
+    for index in range(depth):  # upsampling[k] works at the resolution of encoder block depth-1-k
+        name = f"upsampling.{depth - 1 - index}.0.weight"
+        assert with_skips[name].shape[0] == plain[name].shape[0] + WIDTH * 2**index
+
+
+def test_a_decoder_refuses_skips_it_was_not_built_for_and_needs_those_it_was():
+    encoder = ConvEncoder(32, 1, WIDTH, EMBED_DIM)
+    embeddings, skips = encoder.embed_with_skips(torch.rand(2, 1, 32, 32))
+    with pytest.raises(ValueError, match="skips=False"):
+        ConvDecoder(32, 1, WIDTH, EMBED_DIM)(embeddings, skips)
+    with pytest.raises(ValueError, match="skips=True"):
+        ConvDecoder(32, 1, WIDTH, EMBED_DIM, skips=True)(embeddings)

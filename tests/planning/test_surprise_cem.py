@@ -2,6 +2,7 @@
 surprise keyframes of the produced sequence as subgoals, and the latent CEM shared with KEYIN."""
 
 import numpy as np
+import pytest
 import torch
 
 from keyin.eval.surprise import surprise_keyframes
@@ -13,8 +14,8 @@ from tests.planning.trained_models import KEYFRAMES, SIZE, save, surprise_module
 HORIZON, LATENT = 6, 2  # the module's n_future and latent size
 
 
-def rollouts() -> SurpriseRollouts:
-    return SurpriseRollouts(surprise_module().eval(), disc_images(np.array([8.0, 8.0]), SIZE))
+def rollouts(skips: bool = False) -> SurpriseRollouts:
+    return SurpriseRollouts(surprise_module(skips).eval(), disc_images(np.array([8.0, 8.0]), SIZE))
 
 
 def test_a_rollout_is_the_predictor_fed_its_own_predictions():
@@ -27,15 +28,17 @@ def test_a_rollout_is_the_predictor_fed_its_own_predictions():
     torch.testing.assert_close(predicted, torch.tanh(outputs))
 
 
-def test_the_subgoals_are_the_decoded_frames_at_the_surprise_keyframes_of_the_rollout():
-    render = rollouts()
+@pytest.mark.parametrize("skips", [False, True])
+def test_the_subgoals_are_the_decoded_frames_at_the_surprise_keyframes_of_the_rollout(skips):
+    render = rollouts(skips)
     z = np.random.default_rng(1).standard_normal((3, HORIZON, LATENT))
     subgoals = render(z, False)
     assert subgoals.shape == (3, KEYFRAMES, SIZE, SIZE, 3) and subgoals.dtype == np.uint8
     module = render.module
     with torch.no_grad():
-        frames = torch.sigmoid(module.decoder(render.rollout(torch.as_tensor(z, dtype=torch.float32))))
         start = images_to_tensor(disc_images(np.array([8.0, 8.0]), SIZE), module.encoder.image_shape)
+        _, context = module.encode(start[None, None])  # with skips: the start frame's encoder features
+        frames = torch.sigmoid(module.decode(render.rollout(torch.as_tensor(z, dtype=torch.float32)), context))
         kl = module.surprise(torch.cat([start.expand(3, 1, -1, -1, -1), frames], 1))
     positions = surprise_keyframes(kl, torch.full((3,), HORIZON), 1, KEYFRAMES, shift=-1)
     for row, picked in enumerate(positions):

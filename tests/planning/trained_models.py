@@ -46,9 +46,10 @@ def save(module: L.LightningModule, path: Path, model: str, dataset: str = "push
     return str(path)
 
 
-def surprise_module() -> SurpriseModule:
+def surprise_module(skips: bool = False) -> SurpriseModule:
     torch.manual_seed(0)
     return SurpriseModule(
         **{key: value for key, value in CONV.items() if key != "mlp_hidden"}, n_cond=1, n_future=6,
         n_keyframes=KEYFRAMES, latent_dim=2, lstm_hidden=16, predictor_layers=1, posterior_layers=1, beta=1.0, lr=1e-3,
+        skips=skips,
     )
