@@ -18,11 +18,11 @@ import time
 from datetime import date
 
 import torch
-from hydra import compose, initialize_config_dir
+from hydra import compose, initialize_config_module
 from hydra.utils import instantiate
 from torch.profiler import profile
 
-from keyin.cli.app import CONFIG_DIR
+from keyin.cli.app import CONFIG_MODULE
 
 
 def random_batch(dataset, batch_size: int, device: torch.device) -> dict[str, torch.Tensor]:
@@ -80,7 +80,7 @@ def main() -> None:
     args = parser.parse_args()
     device = torch.device(args.device)
     torch.manual_seed(0)
-    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         cfg = compose("train", overrides=[f"scale={args.scale}", f"dataset={args.dataset}"])
     stage1 = instantiate(cfg.model.interpolator)
     stage2 = instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams))

@@ -1,4 +1,4 @@
-"""What every entry point shares: where conf/ is, one-line errors, the run dir, metrics.json."""
+"""What every entry point shares: where the configs are, one-line errors, the run dir, metrics.json."""
 
 from __future__ import annotations
 
@@ -22,7 +22,8 @@ import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolver
 from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
 
-CONFIG_DIR = str(Path(__file__).resolve().parents[2] / "conf")
+# The configs ship inside the package (keyin/conf), so an installed keyin needs no source tree.
+CONFIG_MODULE = "keyin.conf"
 
 # ${keyin.default:value,fallback}: the fallback when value is null (resume= picks the run dir).
 OmegaConf.register_new_resolver(
@@ -121,12 +122,12 @@ def hydra_raises() -> Iterator[None]:
 
 
 def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Callable[[], None]]:
-    """``hydra.main`` on ``conf/<config_name>.yaml``, where a bad config group option, an unknown
+    """``hydra.main`` on ``keyin/conf/<config_name>.yaml``, where a bad config group option, an unknown
     key, an unparsable override or a run dir that cannot be created gives one ``error:`` line and
     exit status 2, like the checks of the task itself."""
 
     def decorate(task: Callable[[DictConfig], Any]) -> Callable[[], None]:
-        hydra_main = hydra.main(config_path=CONFIG_DIR, config_name=config_name, version_base="1.3")(task)
+        hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(task)
 
         @functools.wraps(task)
         def main() -> None:

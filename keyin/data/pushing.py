@@ -32,7 +32,7 @@ PLANNING_SPLIT = "planning"  # the fixed planning tasks (REFERENCE §5.2), a spl
 class PushingGenerator:
     """Pushing clip generator; plain numbers only, so it pickles into spawn workers.
 
-    The fields mirror ``conf/dataset/pushing.yaml`` (``generator:``); docs/pushing.md explains each.
+    The fields mirror ``keyin/conf/dataset/pushing.yaml`` (``generator:``); docs/pushing.md explains each.
     """
 
     image_size: int = 64

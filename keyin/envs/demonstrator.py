@@ -29,7 +29,7 @@ from keyin.envs.layout import Layout
 
 @dataclass(frozen=True)
 class DemoParams:
-    """Demonstrator constants (plain numbers; mirrored in ``conf/dataset/pushing.yaml``)."""
+    """Demonstrator constants (plain numbers; mirrored in ``keyin/conf/dataset/pushing.yaml``)."""
 
     n_pushes: int = 6
     detour_margin: float = 0.10

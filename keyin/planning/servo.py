@@ -35,7 +35,7 @@ from keyin.envs.segmentation import puck_centroid
 from keyin.planning.cem import CEMParams, cem
 from keyin.planning.rollout import BatchRollout, Simulator
 
-# conf/planner keys -> ServoParams fields
+# keyin/conf/planner keys -> ServoParams fields
 CONFIG_KEYS = {
     "servo_horizon": "horizon",
     "servo_samples": "samples",
@@ -54,7 +54,7 @@ CONFIG_KEYS = {
 
 @dataclass(frozen=True)
 class ServoParams:
-    """The servo's constants (``conf/planner/*.yaml``, names in :data:`CONFIG_KEYS`)."""
+    """The servo's constants (``keyin/conf/planner/*.yaml``, names in :data:`CONFIG_KEYS`)."""
 
     horizon: int = 8  # l, actions per plan
     samples: int = 200

@@ -5,9 +5,9 @@ import json
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from hydra import compose, initialize_config_module
 
-from keyin.cli.app import CONFIG_DIR
+from keyin.cli.app import CONFIG_MODULE
 from tests.cli.runner import error_line, last_json, run
 
 TRAIN = ("train", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0", "evaluate=false",
@@ -66,7 +66,7 @@ def test_a_missing_or_wrong_checkpoint_gives_one_error_line(root, overrides, mes
 
 
 def test_jumpy_is_the_latent_cem_with_the_jumpy_model_and_table2_sweeps_the_learned_rows():
-    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         keyin = compose("plan", overrides=["planner=keyin"]).planner
         jumpy = compose("plan", overrides=["planner=jumpy"]).planner
         sweep = compose("plan", ["experiment=pushing_table2"], return_hydra_config=True).hydra.sweeper.params.planner

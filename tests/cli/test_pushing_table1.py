@@ -3,10 +3,10 @@
 import json
 
 import pytest
-from hydra import compose, initialize_config_dir
+from hydra import compose, initialize_config_module
 
 from keyin.cli import report
-from keyin.cli.app import CONFIG_DIR
+from keyin.cli.app import CONFIG_MODULE
 from tests.cli.runner import run
 
 TRAINED = ("keyin", "jumpy", "static", "surprise")
@@ -43,7 +43,7 @@ def test_every_pushing_model_trains_and_scores_its_keyframes(sweep, tmp_path, mo
      ("paper", {"conv_width": 32, "batch_size": 30, "inter_offset_min": 2, "inter_offset_max": 6})],
 )
 def test_a_scale_preset_takes_its_pushing_values_only_on_pushing(scale, expected):
-    with initialize_config_dir(CONFIG_DIR, version_base="1.3"):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         pushing = compose("train", overrides=[f"scale={scale}", "experiment=pushing_table1"])
         brownian = compose("train", overrides=[f"scale={scale}", "dataset=brownian"])
     assert {key: pushing.scale[key] for key in expected} == expected

@@ -2,7 +2,6 @@
 
 import multiprocessing
 from dataclasses import asdict
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +13,7 @@ from keyin.data.pushing import PushingGenerator, write_planning_tasks
 from keyin.envs.geometry import apply_homography
 from keyin.envs.layout import Layout
 from keyin.envs.segmentation import puck_centroid
+from tests.configs import CONFIGS
 
 GENERATOR = PushingGenerator()
 
@@ -132,7 +132,7 @@ def test_config_mirrors_the_generator():
     from hydra.utils import instantiate
     from omegaconf import OmegaConf
 
-    config = OmegaConf.load(Path(__file__).parents[2] / "conf" / "dataset" / "pushing.yaml")
+    config = OmegaConf.load(CONFIGS / "dataset" / "pushing.yaml")
     assert config.n_cond == PushingGenerator.n_cond == 1 and config.n_keyframes == 6
     assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR))
     assert instantiate(config.generator) == GENERATOR

@@ -1,6 +1,5 @@
 """The low-level servo: subgoal switching, reaching a nearby subgoal, image targets, config."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,6 +7,7 @@ from omegaconf import OmegaConf
 
 from keyin.envs.geometry import apply_homography
 from keyin.planning.servo import CONFIG_KEYS, ServoParams, advance_subgoal, run_servo, subgoal_pixels
+from tests.configs import CONFIGS
 
 # A small, fast budget; the pusher starts right behind the puck.
 FAST = ServoParams(horizon=4, samples=40, elites=5, iterations=2, max_timesteps=8)
@@ -72,7 +72,7 @@ def test_subgoal_images_invisible_subgoals_and_goal_check(env):
 
 
 def test_params_from_the_planner_config():
-    config = OmegaConf.load(Path(__file__).parents[2] / "conf" / "planner" / "low_level" / "servo.yaml")
+    config = OmegaConf.load(CONFIGS / "planner" / "low_level" / "servo.yaml")
     assert set(config) == set(CONFIG_KEYS)  # every planner includes these
     params = ServoParams.from_config(config)
     assert params == ServoParams()  # the dataclass defaults are the paper's / the config's numbers
