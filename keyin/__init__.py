@@ -1,3 +1,3 @@
 """keyin: keyframe discovery and planning with keyframe-based stochastic video prediction."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -20,6 +20,8 @@ from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolvers)
 from keyin.data.hdf5 import atomic_write_text
+from keyin import __version__
+from keyin.cli.checks import moved_key_message
 from keyin.errors import KeyinError
 
 # The configs ship inside the package (keyin/conf), so an installed keyin needs no source tree.
@@ -83,7 +85,11 @@ def user_errors(task: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any
 
 
 def unknown_key_message(err: ConfigAttributeError | ConfigKeyError, hint: str) -> str:
-    """``a.b.typo=1``: name the key, the closest existing one (or all of them) and ``+key=``."""
+    """``a.b.typo=1``: name the key, the closest existing one (or all of them) and ``+key=``; a
+    method choice given where keyin 0.1 kept it: where it lives now."""
+    moved = moved_key_message(err.full_key)
+    if moved is not None:
+        return moved
     parent = err.full_key.rpartition(".")[0]
     keys = [str(k) for k in (err.parent_node or {}) if k != "hydra"]
     close = difflib.get_close_matches(str(err.key), keys, n=1)
@@ -156,7 +162,9 @@ def config_choice(group: str) -> str | None:
 
 
 def write_metrics(metrics: Mapping[str, Any], folder: Path) -> Path:
-    """Write ``metrics.json`` atomically and print the metrics as the last line of output."""
+    """Write ``metrics.json`` atomically, with the keyin version that wrote it, and print the metrics
+    as the last line of output."""
+    metrics = {**metrics, "keyin_version": __version__}
     path = Path(folder) / "metrics.json"
     atomic_write_text(path, json.dumps(dict(metrics), indent=1, sort_keys=True))
     print(json.dumps(dict(metrics), sort_keys=True))

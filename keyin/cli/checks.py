@@ -59,6 +59,35 @@ def check_common(cfg: Mapping[str, Any]) -> None:
 
 
 STAGES = ("both", "interpolator", "keyframes")
+# What a scale= preset may hold: sizes, budgets and batch sizes, never a method choice.
+SCALE_KEYS = (
+    "embed_dim", "conv_width", "lstm_hidden", "lstm_layers", "mlp_hidden", "inter_latent", "surprise_latent",
+    "key_latent", "batch_size", "stage1_batch_size", "ae_frames", "lr_stage1", "lr_surprise", "lr_stage2", "lr_tap",
+    "stage1_steps", "surprise_steps", "stage2_steps", "tap_steps", "val_every", "checkpoint_every", "val_clips",
+    "eval_clips", "teacher_clips",
+)
+# Where the method choices that keyin 0.1 kept under scale. (and loss.) live now.
+MOVED_KEYS = {
+    **{f"scale.{key}": f"backbone.{key}" for key in (
+        "norm", "coord_channels", "inter_step_input", "inter_offset_min", "inter_offset_max", "foreground_weight")},
+    **{f"loss.{key}": f"backbone.{key}" for key in ("foreground_weight", "foreground_threshold")},
+    **{f"scale.{key}": f"model.keyframes.{key}" for key in (
+        "teacher_weight", "teacher_keyframe_cost", "offset_evidence", "discovery", "map_keyframe_cost",
+        "map_boundary_weight")},
+    "loss.teacher_weight": "model.keyframes.teacher_weight",
+}
+
+
+def moved_key_message(key: str) -> str | None:
+    """The one-line answer to a method choice given where keyin 0.1 kept it (``scale.teacher_weight``)."""
+    new = MOVED_KEYS.get(key)
+    if new is None:
+        return None
+    return (
+        f"{key} is where keyin 0.1 kept a method choice, which lives in {new} now: set {new}=... instead "
+        f"(scale= holds sizes and budgets only; model=keyin_plus and backbone=ours hold our additions' "
+        f"values; docs/architecture.md)"
+    )
 SCALE_COUNTS = (
     "batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "tap_steps", "val_every",
     "checkpoint_every", "val_clips", "eval_clips",
@@ -75,6 +104,12 @@ def check_training(cfg: Mapping[str, Any]) -> None:
             f"stage={cfg['stage']} needs a two-stage model (keyin, jumpy, static); "
             f"model={cfg['model']['name']} has {'one stage' if cfg['model']['trainable'] else 'no training'}: drop stage="
         )
+    for key in cfg["scale"]:
+        if key not in SCALE_KEYS:
+            raise ConfigError(
+                moved_key_message(f"scale.{key}")
+                or f"scale.{key} is not a size or budget; a scale= preset holds only {', '.join(SCALE_KEYS)}"
+            )
     for key in SCALE_COUNTS:
         require_positive_int(cfg["scale"][key], f"scale.{key}")
     require_positive_int(cfg["num_workers"] + 1, "num_workers + 1")

@@ -117,7 +117,9 @@ def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: 
 
 def record_metrics(metrics: dict, cfg: DictConfig, folder: Path) -> dict:
     """Add the run's dataset, seed and scale to ``metrics`` and write metrics.json."""
-    metrics.update(dataset=cfg.dataset.name, seed=cfg.seed, scale=config_choice("scale"))
+    metrics.update(
+        dataset=cfg.dataset.name, seed=cfg.seed, scale=config_choice("scale"), backbone=config_choice("backbone")
+    )
     write_metrics(metrics, folder)
     return metrics
 

@@ -10,11 +10,16 @@ import lightning as L
 import torch
 from lightning.pytorch.plugins.io import TorchCheckpointIO
 
+from keyin import __version__
 from keyin.data.hdf5 import atomic_write_bytes
 from keyin.errors import CheckpointError
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
+VERSION_KEY = "keyin_version"
+# keyin 0.1 called KEYIN with our additions model=keyin; since 0.2 that is keyin_plus, and model=keyin
+# is the paper's method (named keyin_paper).
+LEGACY_MODEL_NAMES = {"keyin": "keyin_plus"}
 PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
 
 
@@ -27,6 +32,14 @@ class RunConfigInCheckpoint(L.Callback):
     def on_save_checkpoint(self, trainer: L.Trainer, module: L.LightningModule, checkpoint: dict) -> None:
         checkpoint[CONFIG_KEY] = self.config
         checkpoint[STAGE_KEY] = module.stage
+        checkpoint[VERSION_KEY] = __version__
+
+
+def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
+    """The ``model.name`` a checkpoint was trained as, in this version's names (a checkpoint of keyin
+    0.1, which has no version entry, says ``keyin`` for today's ``keyin_plus``)."""
+    name = (checkpoint.get(CONFIG_KEY) or {}).get("model", {}).get("name")
+    return name if VERSION_KEY in checkpoint else LEGACY_MODEL_NAMES.get(name, name)
 
 
 STAGE_CHECKPOINTS = {
@@ -88,7 +101,7 @@ def check_same_model(
 ) -> None:
     """Refuse to resume a checkpoint of another model: another ``model=`` (stage 1 excepted, which
     KEYIN, Jumpy and Static share) or other parameter shapes (other sizes in ``scale=``/``dataset=``)."""
-    saved_model = (checkpoint.get(CONFIG_KEY) or {}).get("model", {}).get("name")
+    saved_model = saved_model_name(checkpoint)
     model = config.get("model", {}).get("name")
     if module.stage != "interpolator" and saved_model not in (None, model):
         raise CheckpointError(
@@ -105,7 +118,8 @@ def check_same_model(
 
 
 def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tuple[L.LightningModule, dict[str, Any]]:
-    """A trained module of either stage (in eval mode) and the run config stored with it.
+    """A trained module of either stage (in eval mode) and the run config stored with it, its
+    ``model.name`` in this version's names (:func:`saved_model_name`).
 
     Args:
         stage: "interpolator", "keyframes", or None for whichever the checkpoint holds.
@@ -121,4 +135,7 @@ def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tu
     module_class = stages[checkpoint[STAGE_KEY]]
     module = module_class(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
-    return module.eval(), checkpoint[CONFIG_KEY]
+    config = dict(checkpoint[CONFIG_KEY])
+    if "model" in config:
+        config["model"] = dict(config["model"], name=saved_model_name(checkpoint))
+    return module.eval(), config

@@ -12,7 +12,8 @@ from tests.cli.runner import error_line, last_json, run
 
 TRAIN = ("train", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0", "evaluate=false",
          "trainer.enable_progress_bar=false", "+trainer.num_sanity_val_steps=0", "scale.stage1_steps=1",
-         "scale.stage2_steps=1", "scale.batch_size=2", "scale.val_clips=2", "loss.teacher_weight=0",
+         "scale.stage2_steps=1", "scale.batch_size=2", "scale.val_clips=2", "model=keyin_plus",
+         "model.keyframes.teacher_weight=0",
          "hydra.run.dir=trained")
 TINY = ("planner.keyframe_samples=8", "planner.keyframe_elites=2", "planner.keyframe_iterations=1",
         "planner.servo_samples=16", "planner.elites=4", "planner.cem_iterations=1", "planner.max_timesteps=3",
@@ -51,13 +52,13 @@ def test_resuming_with_a_retrained_checkpoint_is_refused(root):
 
 
 @pytest.mark.parametrize("overrides,message", [
-    (("planner=keyin",), "checkpoint runs/multirun/pushing_table1/keyin_seed0/checkpoints/keyframes/last.ckpt "
-                         "does not exist; the planner needs a model=keyin dataset=pushing checkpoint: make it with "
-                         "`keyin-train -m experiment=pushing_table1 model=keyin seed=0`"),
+    (("planner=keyin",), "checkpoint runs/multirun/pushing_table1/keyin_plus_seed0/checkpoints/keyframes/last.ckpt "
+                         "does not exist; the planner needs a model=keyin_plus dataset=pushing checkpoint: make it with "
+                         "`keyin-train -m experiment=pushing_table1 model=keyin_plus seed=0`"),
     (("planner=keyin", "planner.checkpoint=trained/checkpoints/interpolator/last.ckpt"),
      "is a 'interpolator' checkpoint but a 'keyframes' one is needed"),
     (("planner=jumpy", f"planner.checkpoint={KEYFRAMES}"),
-     f"{KEYFRAMES} holds a model=keyin dataset=pushing checkpoint; the planner needs a model=jumpy"),
+     f"{KEYFRAMES} holds a model=keyin_plus dataset=pushing checkpoint; the planner needs a model=jumpy"),
     (("planner=tap", f"planner.checkpoint={KEYFRAMES}"), "`keyin-train model=tap dataset=pushing"),
     (("planner=tap",), "checkpoint runs/pushing_tap/checkpoints/tap/last.ckpt does not exist"),
 ])
@@ -71,7 +72,7 @@ def test_jumpy_is_the_latent_cem_with_the_jumpy_model_and_table2_sweeps_the_lear
         jumpy = compose("plan", overrides=["planner=jumpy"]).planner
         sweep = compose("plan", ["experiment=pushing_table2"], return_hydra_config=True).hydra.sweeper.params.planner
     assert jumpy.controller.subgoals._target_ == keyin.controller.subgoals._target_
-    assert (jumpy.controller.subgoals.model, keyin.controller.subgoals.model) == ("jumpy", "keyin")
+    assert (jumpy.controller.subgoals.model, keyin.controller.subgoals.model) == ("jumpy", "keyin_plus")
     assert jumpy.checkpoint == "runs/multirun/pushing_table1/jumpy_seed0/checkpoints/keyframes/last.ckpt"
     assert jumpy.keyframe_samples == 200 and jumpy.keyframe_elites == 10 and jumpy.keyframe_iterations == 3
     assert {"keyin", "jumpy", "surprise", "tap"} <= set(sweep.split(","))

@@ -9,7 +9,7 @@ from keyin.cli import report
 from keyin.cli.app import CONFIG_MODULE
 from tests.cli.runner import run
 
-TRAINED = ("keyin", "jumpy", "static", "surprise")
+TRAINED = ("keyin_plus", "jumpy", "static", "surprise")
 SWEEP = ("-m", "experiment=pushing_table1", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
          f"model={','.join(TRAINED)},constant", "seed=0")
 
@@ -30,21 +30,26 @@ def test_every_pushing_model_trains_and_scores_its_keyframes(sweep, tmp_path, mo
         metrics = json.loads((sweep / f"{name}_seed0" / "metrics.json").read_text())
         assert metrics["method"] == name and metrics["dataset"] == "pushing" and metrics["n_sequences"] == 4
         assert 0.0 <= metrics["f1"] <= 1.0
-    assert (sweep / "stage1_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
+    assert (sweep / "stage1_ours_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
     monkeypatch.chdir(tmp_path)  # the report finds each job's data where the job ran, not in its own cwd
     report.main([str(sweep), "--examples", "1"])
     table = (sweep / "report" / "table1.md").read_text()
-    assert "| pushing | keyin |" in table and "| 0.30 |" in table  # the paper's pushing column beside ours
+    assert "| pushing | keyin_plus |" in table and "| 0.30 |" in table  # the paper's pushing column beside ours
 
 
-@pytest.mark.parametrize(
-    ("scale", "expected"),
-    [("cpu", {"conv_width": 8, "batch_size": 16, "inter_offset_min": 1}),
-     ("paper", {"conv_width": 32, "batch_size": 30, "inter_offset_min": 2, "inter_offset_max": 6})],
-)
-def test_a_scale_preset_takes_its_pushing_values_only_on_pushing(scale, expected):
+def test_the_cpu_preset_takes_its_pushing_sizes_only_on_pushing():
+    expected = {"conv_width": 8, "batch_size": 16, "stage1_steps": 2000}
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
-        pushing = compose("train", overrides=[f"scale={scale}", "experiment=pushing_table1"])
-        brownian = compose("train", overrides=[f"scale={scale}", "dataset=brownian"])
+        pushing = compose("train", overrides=["scale=cpu", "experiment=pushing_table1"])
+        brownian = compose("train", overrides=["scale=cpu", "dataset=brownian"])
     assert {key: pushing.scale[key] for key in expected} == expected
-    assert any(brownian.scale[key] != value for key, value in expected.items())
+    assert all(brownian.scale[key] != value for key, value in expected.items())
+
+
+@pytest.mark.parametrize(("backbone", "dataset", "offsets"), [
+    ("paper", "pushing", (2, 6)), ("paper", "brownian", (2, 8)), ("ours", "pushing", (1, 6)), ("ours", "brownian", (1, 10)),
+])
+def test_the_backbone_takes_the_stage1_segment_lengths_of_its_dataset(backbone, dataset, offsets):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        interpolator = compose("train", overrides=[f"backbone={backbone}", f"dataset={dataset}"]).model.interpolator
+    assert (interpolator.offset_min, interpolator.offset_max) == offsets

@@ -24,7 +24,7 @@ def test_every_job_scores_its_method_and_surprise_reports_both_index_readings(sw
     metrics = {m: json.loads((folder / f"{m}_seed0" / "metrics.json").read_text()) for m in ("static", "surprise", "random")}
     assert all(m["method"] == name and m["seed"] == 0 and m["n_sequences"] == 8 for name, m in metrics.items())
     assert set(metrics["surprise"]["variants"]) == {"surprise_shift0"}
-    assert (folder / "stage1_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
+    assert (folder / "stage1_ours_seed0" / "checkpoints" / "interpolator" / "last.ckpt").is_file()
     assert not (folder / "static_seed0" / "checkpoints" / "interpolator").exists()  # stage 1 is shared
     assert (folder / "surprise_seed0" / "checkpoints" / "surprise" / "last.ckpt").is_file()
 

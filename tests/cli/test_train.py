@@ -2,16 +2,25 @@
 
 import json
 import shutil
+from pathlib import Path
 
 import imageio.v3 as iio
 import pytest
 import torch
 
 from keyin.lit import checkpoints
-from keyin.lit.checkpoints import CONFIG_KEY, load_checkpoint
+from keyin import __version__
+from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_checkpoint
 from keyin.lit.interpolator import InterpolatorModule
 from tests.cli.runner import error_line, last_json, run
+from tests.configs import OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
 from tests.faults import fill_disk_on
+
+
+# keyin 0.1's `keyin-train experiment=brownian_keyin scale=smoke`, in today's names.
+KEYIN_SMOKE = ("experiment=brownian_keyin", "scale=smoke", *OLD_SMOKE_KEYIN, "logger=none",
+               "trainer.enable_progress_bar=false")
+REFERENCE = json.loads((Path(__file__).parents[1] / "reference" / "smoke_keyin_metrics.json").read_text())
 
 
 @pytest.fixture(scope="module")
@@ -19,15 +28,14 @@ def trained(tmp_path_factory):
     root = tmp_path_factory.mktemp("train")
     generated = run("generate", "splits={test: 8}", "progress=false", cwd=root)
     assert generated.returncode == 0, generated.stderr
-    result = run("train", "experiment=brownian_keyin", "scale=smoke", "logger=none",
-                 "trainer.enable_progress_bar=false", "hydra.run.dir=run", cwd=root)
+    result = run("train", *KEYIN_SMOKE, "hydra.run.dir=run", cwd=root)
     assert result.returncode == 0, result.stderr
     return root, last_json(result.stdout)
 
 
 def test_training_writes_both_stages_and_scores_the_test_clips(trained):
     root, metrics = trained
-    assert metrics["method"] == "keyin" and metrics["n_sequences"] == 8
+    assert metrics["method"] == "keyin_plus" and metrics["n_sequences"] == 8
     assert 0.0 <= metrics["f1"] <= 1.0
     assert json.loads((root / "run" / "metrics.json").read_text()) == metrics
     assert (root / "run" / "keyframes.png").is_file()
@@ -35,6 +43,17 @@ def test_training_writes_both_stages_and_scores_the_test_clips(trained):
         checkpoint = load_checkpoint(root / "run" / "checkpoints" / stage / "last.ckpt", stage)
         assert checkpoint["global_step"] == 3
         assert checkpoint[CONFIG_KEY]["scale"]["stage1_steps"] == 3  # the full config travels
+        assert checkpoint[VERSION_KEY] == __version__
+
+
+def test_the_restructured_configs_train_what_keyin_0_1_trained(trained):
+    """The same seed and the same modules give keyin 0.1's smoke metrics (recorded before the restructure)."""
+    _, metrics = trained
+    old = REFERENCE["metrics"]
+    renamed = {name.replace("keyin", "keyin_plus", 1): scores for name, scores in old["variants"].items()}
+    assert {key: metrics[key] for key in old if key not in ("method", "variants")} == {
+        key: value for key, value in old.items() if key not in ("method", "variants")}
+    assert metrics["variants"] == renamed
 
 
 def test_frozen_stage1_weights_are_unchanged_by_stage2(trained):
@@ -58,8 +77,7 @@ def test_eval_of_the_checkpoint_matches_the_training_run(trained):
 
 def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):
     root, metrics = trained
-    result = run("train", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
-                 "resume=run", cwd=root)
+    result = run("train", *KEYIN_SMOKE, "resume=run", cwd=root)
     assert result.returncode == 0, result.stderr
     assert last_json(result.stdout)["f1"] == metrics["f1"]
     checkpoint = load_checkpoint(root / "run" / "checkpoints" / "keyframes" / "last.ckpt")
@@ -68,8 +86,7 @@ def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):
 
 def test_the_same_seed_trains_the_same_weights_and_metrics_twice(trained):
     root, metrics = trained
-    result = run("train", "experiment=brownian_keyin", "scale=smoke", "logger=none",
-                 "trainer.enable_progress_bar=false", "hydra.run.dir=again", cwd=root)
+    result = run("train", *KEYIN_SMOKE, "hydra.run.dir=again", cwd=root)
     assert result.returncode == 0, result.stderr
     again = last_json(result.stdout)
     assert {k: v for k, v in again.items() if k != "run_dir"} == {k: v for k, v in metrics.items() if k != "run_dir"}
@@ -101,7 +118,7 @@ def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
     result = run("eval", "ckpt=run/checkpoints/interpolator/last.ckpt", "progress=false", cwd=root)
     assert result.returncode == 0, result.stderr
     metrics = last_json(result.stdout)
-    assert metrics["method"] == "keyin_segmentation" and metrics["n_sequences"] == 8
+    assert metrics["method"] == "keyin_plus_segmentation" and metrics["n_sequences"] == 8
     assert 0 < metrics["n_predicted"] <= 5  # at most M = 6 gaps, the last one closing the clip
 
 
@@ -161,9 +178,10 @@ def test_resuming_a_run_dir_with_other_model_sizes_is_refused(tmp_path):
 def test_resuming_stage2_as_another_model_is_refused(trained, tmp_path):
     root, _ = trained
     shutil.copytree(root / "run" / "checkpoints", tmp_path / "run" / "checkpoints")
-    line = error_line(run("train", "scale=smoke", "model=jumpy", "logger=none", "resume=run", cwd=tmp_path))
-    assert "holds a model=keyin checkpoint but this run trains model=jumpy" in line
-    assert "resume it with model=keyin, or train model=jumpy in a new run dir" in line
+    line = error_line(run("train", "scale=smoke", "model=jumpy", *OLD_SMOKE_TWO_STAGES, "logger=none", "resume=run",
+                          cwd=tmp_path))
+    assert "holds a model=keyin_plus checkpoint but this run trains model=jumpy" in line
+    assert "resume it with model=keyin_plus, or train model=jumpy in a new run dir" in line
 
 
 def test_a_non_finite_loss_stops_with_one_error_and_keeps_the_last_good_checkpoint(tmp_path, monkeypatch):

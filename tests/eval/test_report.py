@@ -7,17 +7,20 @@ import pytest
 from keyin.eval.report import collect_metrics, csv_table, markdown_table, summarise
 
 
-def write_job(root, name, method, seed, f1, **extra):
+def write_job(root, name, method, seed, f1, version="0.2.0", **extra):
     job = root / name
     job.mkdir(parents=True)
     scores = dict(f1=f1, f1_tol1=f1 + 0.1, precision=f1, recall=f1, n_predicted=5.0)
-    (job / "metrics.json").write_text(json.dumps(dict(scores, method=method, dataset="brownian", seed=seed, **extra)))
+    written_by = {} if version is None else {"keyin_version": version}  # keyin 0.1 wrote no version
+    (job / "metrics.json").write_text(
+        json.dumps(dict(scores, method=method, dataset="brownian", seed=seed, **written_by, **extra))
+    )
 
 
 @pytest.fixture
 def sweep(tmp_path):
     for seed, f1 in enumerate([0.5, 0.6, 0.7]):
-        write_job(tmp_path, f"keyin_seed{seed}", "keyin", seed, f1)
+        write_job(tmp_path, f"keyin_plus_seed{seed}", "keyin_plus", seed, f1)
     write_job(tmp_path, "surprise_seed0", "surprise", 0, 0.4,
               variants={"surprise_shift0": dict(f1=0.1, f1_tol1=0.3, precision=0.1, recall=0.1, n_predicted=6.0)})
     write_job(tmp_path, "random_seed0", "random", 0, 0.16)
@@ -30,7 +33,7 @@ def sweep(tmp_path):
 
 def test_rows_average_over_seeds_in_the_papers_order_with_its_numbers(sweep):
     rows = summarise(collect_metrics(sweep))
-    assert [row.method for row in rows] == ["random", "surprise", "surprise_shift0", "keyin"]
+    assert [row.method for row in rows] == ["random", "surprise", "surprise_shift0", "keyin_plus"]
     keyin = rows[-1]
     assert keyin.seeds == [0, 1, 2]
     assert keyin.mean["f1"] == pytest.approx(0.6) and keyin.std["f1"] == pytest.approx(0.1)  # n - 1
@@ -41,15 +44,24 @@ def test_rows_average_over_seeds_in_the_papers_order_with_its_numbers(sweep):
 def test_markdown_and_csv_carry_every_row(sweep):
     rows = summarise(collect_metrics(sweep))
     markdown = markdown_table(rows)
-    assert "| brownian | keyin | 0.600 ± 0.100 | 0.84 |" in markdown
+    assert "| brownian | keyin_plus | 0.600 ± 0.100 | 0.84 |" in markdown
     assert "| brownian | surprise_shift0 | 0.100 ± 0.000 | – |" in markdown
     lines = csv_table(rows).splitlines()
     assert len(lines) == 1 + len(rows) and lines[0].startswith("dataset,method,seeds,paper_f1,f1_mean,f1_std")
-    assert lines[-1].startswith("brownian,keyin,0 1 2,0.84,0.6,0.1")
+    assert lines[-1].startswith("brownian,keyin_plus,0 1 2,0.84,0.6,0.1")
+
+
+def test_a_keyin_0_1_job_says_keyin_for_keyin_plus_and_is_reported_under_that_name(tmp_path):
+    variants = {"keyin_offsets": dict(f1=0.2, f1_tol1=0.3, precision=0.2, recall=0.2, n_predicted=6.0)}
+    write_job(tmp_path, "old/keyin_seed0", "keyin", 0, 0.5, version=None, variants=variants)
+    write_job(tmp_path, "new/keyin_paper_seed0", "keyin_paper", 0, 0.1)
+    rows = summarise(collect_metrics(tmp_path))
+    assert [row.method for row in rows] == ["keyin_paper", "keyin_plus", "keyin_plus_offsets"]
+    assert rows[1].mean["f1"] == pytest.approx(0.5) and rows[2].mean["f1"] == pytest.approx(0.2)
 
 
 def test_a_seed_reported_twice_and_an_empty_folder_are_refused(sweep, tmp_path_factory):
-    write_job(sweep, "again/keyin_seed0", "keyin", 0, 0.9)
+    write_job(sweep, "again/keyin_plus_seed0", "keyin_plus", 0, 0.9)
     with pytest.raises(ValueError, match="appears twice"):
         summarise(collect_metrics(sweep))
     with pytest.raises(ValueError, match="no metrics.json"):

@@ -1,0 +1,127 @@
+"""The configs: every group option and experiment composes and instantiates, ``scale=`` holds only
+sizes, and every command of the old layout (tests/reference/old_commands.json, recorded before the
+restructure) builds exactly the same modules under its new name."""
+
+import json
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_module
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import OmegaConf
+
+from keyin.cli.app import CONFIG_MODULE
+from keyin.cli.checks import SCALE_KEYS
+from tests.cli.runner import error_line, run
+from tests.configs import CONFIGS, OLD_SMOKE, OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
+
+OLD_COMMANDS = json.loads((Path(__file__).parent / "reference" / "old_commands.json").read_text())
+
+# The old presets priced keyframes at 120 nats on pushing outside scale=cpu (read only by discovery=map).
+OLD_PUSHING_PRICE = ("model.keyframes.map_keyframe_cost=120.0",)
+
+
+def new_model(scale: str, model: str) -> str:
+    """The old scale=paper was the paper's method; the old cpu and smoke presets added ours to KEYIN."""
+    return "keyin_plus" if model == "keyin" and scale != "paper" else model
+
+
+def new_command(scale: str, dataset: str, model: str) -> list[str]:
+    """The overrides that give, in the new layout, what ``scale= dataset= model=`` gave before."""
+    trains_two_stages = model in ("keyin", "jumpy", "static")
+    overrides = [f"scale={scale}", f"dataset={dataset}", f"model={new_model(scale, model)}"]
+    if scale == "cpu" and model != "keyin":
+        overrides.append("backbone=ours")  # the old cpu preset's frame model; keyin_plus picks it itself
+    if scale == "smoke":
+        overrides += OLD_SMOKE_KEYIN if model == "keyin" else OLD_SMOKE_TWO_STAGES if trains_two_stages else OLD_SMOKE
+    if scale != "cpu" and dataset == "pushing" and trains_two_stages:
+        overrides += OLD_PUSHING_PRICE
+    return overrides
+
+
+def module_arguments(model: dict) -> dict:
+    """The constructor arguments of each module a model config builds (its name aside)."""
+    return {key: value for key, value in model.items() if key != "name"}
+
+
+@pytest.mark.parametrize("command", sorted(OLD_COMMANDS))
+def test_every_old_command_builds_the_same_modules_under_its_new_name(command):
+    old = OLD_COMMANDS[command]
+    values = dict(part.split("=") for part in command.split())
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = compose("train", overrides=new_command(values["scale"], values["dataset"], values["model"]))
+    model = OmegaConf.to_container(cfg.model, resolve=True)
+    assert module_arguments(model) == module_arguments(old["model"])
+    assert {key: cfg.scale[key] for key in old["budget"]} == old["budget"]
+    assert model["name"] == {"keyin": "keyin_paper"}.get(new_model(values["scale"], values["model"]), values["model"] if values["model"] != "keyin" else "keyin_plus")
+
+
+def resolve(root: str, overrides: list[str]) -> dict:
+    """Compose ``root`` with ``overrides`` and resolve every interpolation outside ``hydra``, as a
+    job's run dir would (``${hydra:runtime.output_dir}`` included)."""
+    cfg = compose(root, overrides=overrides, return_hydra_config=True)
+    cfg.hydra.runtime.output_dir = "runs/composed"
+    HydraConfig.instance().set_config(cfg)
+    return OmegaConf.to_container(OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"]), resolve=True)
+
+
+def options(group: str) -> list[str]:
+    return sorted(path.stem for path in (CONFIGS / group).glob("*.yaml"))
+
+
+GROUPS = {
+    "train": ("dataset", "backbone", "model", "loss", "trainer", "logger", "scale", "experiment"),
+    "eval": ("dataset",),
+    "plan": ("planner",),
+}
+
+
+@pytest.mark.parametrize(
+    "root, group, option",
+    [(root, group, option) for root, groups in GROUPS.items() for group in groups for option in options(group)
+     if not (root == "train" and option == "pushing_table2") and not (root == "plan" and group == "experiment")],
+)
+def test_every_group_option_composes_and_resolves(root, group, option):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        resolve(root, [f"{group}={option}"])  # every interpolation has a value
+
+
+@pytest.mark.parametrize("experiment", options("experiment"))
+@pytest.mark.parametrize("scale", options("scale"))
+def test_every_experiment_and_every_job_of_its_sweep_composes_at_every_scale(experiment, scale):
+    root = "plan" if experiment == "pushing_table2" else "train"
+    overrides = [f"experiment={experiment}"] + ([f"scale={scale}"] if root == "train" else [])
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        sweep = compose(root, overrides=overrides, return_hydra_config=True).hydra.sweeper.params or {}
+        jobs = [[f"{key}={value}"] for key, values in sweep.items() for value in str(values).split(",")]
+        for job in jobs or [[]]:
+            resolve(root, overrides + job)
+
+
+@pytest.mark.parametrize("scale", options("scale") + [f"../scale_dataset/{name}" for name in options("scale_dataset")])
+def test_a_scale_preset_holds_sizes_and_budgets_only(scale):
+    keys = set(OmegaConf.load(CONFIGS / "scale" / f"{scale}.yaml"))
+    assert keys <= set(SCALE_KEYS), keys - set(SCALE_KEYS)
+
+
+def test_model_keyin_is_the_papers_method_at_every_scale():
+    for scale in options("scale"):
+        for dataset in options("dataset"):
+            with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+                cfg = compose("train", overrides=[f"scale={scale}", f"dataset={dataset}", "model=keyin"])
+            keyframes, interpolator = cfg.model.keyframes, cfg.model.interpolator
+            assert keyframes.teacher_weight == 0 and not keyframes.offset_evidence
+            assert keyframes.discovery == "offsets" and keyframes.offset_mode == "predicted"
+            assert interpolator.foreground_weight == 1.0 and interpolator.norm == "batch"
+            assert interpolator.step_input == "autoregressive" and interpolator.offset_min == 2
+
+
+@pytest.mark.parametrize("override, now", [
+    ("scale.teacher_weight=1", "model.keyframes.teacher_weight"),
+    ("+scale.discovery=map", "model.keyframes.discovery"),
+    ("scale.norm=group", "backbone.norm"),
+    ("loss.foreground_weight=20", "backbone.foreground_weight"),
+])
+def test_a_method_choice_given_where_keyin_0_1_kept_it_says_where_it_lives_now(tmp_path, override, now):
+    line = error_line(run("train", override, "logger=none", cwd=tmp_path))
+    assert f"lives in {now} now: set {now}=... instead" in line and "scale= holds sizes and budgets only" in line
