@@ -19,8 +19,8 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolvers)
-from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
+from keyin.io import atomic_write_text
 
 CONFIG_DIR = str(Path(__file__).resolve().parents[2] / "conf")
 

@@ -22,16 +22,9 @@ from typing import Any, Callable, Mapping, Protocol
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from keyin.data.hdf5 import (
-    MANIFEST_NAME,
-    inspect_shard,
-    read_manifest,
-    remove_stale_temporaries,
-    sha256_of,
-    write_manifest,
-    write_shard,
-)
+from keyin.data.hdf5 import MANIFEST_NAME, inspect_shard, read_manifest, write_manifest, write_shard
 from keyin.errors import DatasetFormatError
+from keyin.io import remove_stale_temporaries, sha256_of
 from keyin.paths import inside
 
 # Splits draw from disjoint seed ranges: clip i of split s uses seed + SPLIT_OFFSETS[s] + i.
