@@ -19,10 +19,10 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolvers)
-from keyin.data.hdf5 import atomic_write_text
 from keyin import __version__
 from keyin.cli.checks import moved_key_message
 from keyin.errors import KeyinError
+from keyin.io import atomic_write_text
 
 # The configs ship inside the package (keyin/conf), so an installed keyin needs no source tree.
 CONFIG_MODULE = "keyin.conf"

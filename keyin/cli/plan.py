@@ -16,10 +16,11 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
-from keyin.data.hdf5 import sha256_of, split_files
+from keyin.data.hdf5 import split_files
 from keyin.data.pushing import PLANNING_SPLIT
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.eval.planning import planning_summary
+from keyin.io import sha256_of
 from keyin.planning.journal import claim_run_dir
 from keyin.planning.runner import PlanJob, run_tasks
 from keyin.planning.servo import ServoParams

@@ -20,7 +20,6 @@ from omegaconf import OmegaConf
 
 from keyin.cli.app import fail
 from keyin.data.datamodule import split_clips
-from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import KeyinError
 from keyin.eval.planning_report import (
     collect_planning,
@@ -39,6 +38,7 @@ from keyin.eval.report import (
     read_metrics,
     summarise,
 )
+from keyin.io import atomic_write_text
 from keyin.paths import inside
 from keyin.viz.report import save_f1_bars, save_method_comparison, save_success_curves
 

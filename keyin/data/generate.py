@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import multiprocessing
 import os
-import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
@@ -22,17 +21,11 @@ from typing import Any, Callable, Mapping, Protocol
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from keyin.data.hdf5 import (
-    MANIFEST_NAME,
-    inspect_shard,
-    read_manifest,
-    remove_stale_temporaries,
-    sha256_of,
-    write_manifest,
-    write_shard,
-)
+from keyin.data.hdf5 import MANIFEST_NAME, inspect_shard, read_manifest, write_manifest, write_shard
 from keyin.errors import DatasetFormatError
+from keyin.io import remove_stale_temporaries, sha256_of
 from keyin.paths import inside
+from keyin.workers import exit_with_parent
 
 # Splits draw from disjoint seed ranges: clip i of split s uses seed + SPLIT_OFFSETS[s] + i.
 SPLIT_OFFSETS = {"train": 0, "val": 100_000_000, "test": 200_000_000}
@@ -98,18 +91,6 @@ def write_shard_job(
     attrs = dict(meta, seed=base, split=job.split, n_cond=generator.n_cond, first_index=job.start)
     checksum = write_shard(folder / job.file, stacked, attrs)
     return job, checksum, attempts
-
-
-def exit_with_parent(parent: int) -> None:
-    """Worker initializer: end the worker within a second of its parent's death (e.g. kill -9),
-    instead of waiting forever on a queue no one writes to."""
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(1.0)
-        os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
 
 
 def finished_shards(folder: Path, config: Mapping[str, Any]) -> dict[str, dict[str, dict]]:

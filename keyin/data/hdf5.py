@@ -9,9 +9,9 @@ A shard holds ``n`` clips of ``L`` frames each:
 
 File attributes: ``format_version``, ``generator``, ``config`` (JSON), ``seed``, ``split``,
 ``n_cond`` (conditioning frames at the start of each clip) and ``code_version``.
-Shards are written to a temporary name and renamed when complete, so a shard either exists whole
-or not at all (a temporary file left by a killed writer is removed by the next run); the manifest
-records each shard's SHA-256 so corruption is detected on read.
+Shards are written to a temporary name and renamed when complete (:mod:`keyin.io`), so a shard
+either exists whole or not at all (a temporary file left by a killed writer is removed by the next
+run); the manifest records each shard's SHA-256 so corruption is detected on read.
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -29,79 +28,12 @@ import numpy as np
 
 from keyin import __version__
 from keyin.errors import DatasetFormatError
+from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.paths import inside
 
 FORMAT_VERSION = 1
-TEMPORARY_TAG = ".tmp-"  # a file being written is named .<name>.tmp-<pid> until its rename
 MANIFEST_NAME = "manifest.json"
 REQUIRED_ATTRS = ("format_version", "generator", "config", "seed", "split", "n_cond")
-
-
-def sha256_of(path: Path) -> str:
-    """Hex SHA-256 of a file, read in 1 MiB blocks."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-def temporary_path(path: Path) -> Path:
-    """Where ``path`` is written before the rename: a hidden name in the same folder with our PID."""
-    return path.with_name(f".{path.name}{TEMPORARY_TAG}{os.getpid()}")
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file, fsync and a rename.
-
-    ``path`` either keeps its old content or gets all of ``data``; on an error (a full disk) the
-    temporary file is removed. Only a killed process leaves one, which
-    :func:`remove_stale_temporaries` clears on the next run.
-    """
-    path = Path(path)
-    tmp = temporary_path(path)
-    try:
-        with open(tmp, "wb") as handle:
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except OSError as err:
-        if err.filename is None:  # a failed write() names no file: name the one being written
-            raise OSError(err.errno, err.strerror, str(path)) from err
-        raise
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_write_bytes`)."""
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def process_alive(pid: int) -> bool:
-    """Whether a process with this id exists (on this machine)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    return True
-
-
-def remove_stale_temporaries(folder: Path) -> list[Path]:
-    """Delete the temporary files that killed writers left in ``folder``; returns them.
-
-    A temporary file whose writer (the PID in its name) still runs is kept.
-    """
-    folder, removed = Path(folder), []
-    for tmp in folder.glob(f".*{TEMPORARY_TAG}*") if folder.is_dir() else ():
-        pid = tmp.name.rpartition(TEMPORARY_TAG)[2]
-        if pid.isdigit() and not process_alive(int(pid)):
-            tmp.unlink(missing_ok=True)
-            removed.append(tmp)
-    return removed
 
 
 def write_shard(path: Path, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> str:

@@ -101,19 +101,6 @@ def _push_out_local(
     return (moved[0], moved[1]), depth[axis]
 
 
-def push_out_of_box(point: np.ndarray, wall: np.ndarray, inflate: float) -> tuple[np.ndarray, float]:
-    """Move a point lying inside the grown box to the nearest point of its boundary.
-
-    Returns:
-        The point (2,) (unchanged when outside) and the distance it moved.
-    """
-    half = (float(wall[2]) + inflate, float(wall[3]) + inflate)
-    moved, distance = _push_out_local(_local(point, wall), half)
-    if distance == 0.0:
-        return np.asarray(point, dtype=np.float64), 0.0
-    return from_wall_frame(np.array(moved), wall), distance
-
-
 def _visible(a: int, b: int, nodes: list[tuple[float, float]], test: tuple[float, float]) -> bool:
     """Visibility in the graph {0: start, 1: goal, 2..5: corners counter-clockwise}."""
     if a >= 2 and b >= 2:  # corners: neighbours see each other along an edge, opposite ones do not

@@ -10,8 +10,8 @@ import torch
 from rich.progress import Progress
 from torch.utils.data import DataLoader, Dataset
 
-from keyin.data.hdf5 import atomic_write_text
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
+from keyin.io import atomic_write_text
 from keyin.viz.keyframes import save_keyframe_pictures
 
 Discoverer = Callable[[torch.Tensor, torch.Tensor], list[list[int]]]

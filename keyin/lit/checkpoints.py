@@ -11,8 +11,8 @@ import torch
 from lightning.pytorch.plugins.io import TorchCheckpointIO
 
 from keyin import __version__
-from keyin.data.hdf5 import atomic_write_bytes
 from keyin.errors import CheckpointError
+from keyin.io import atomic_write_bytes
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"

@@ -9,8 +9,8 @@ from typing import Any, Mapping
 import lightning as L
 from lightning.pytorch.callbacks import ModelCheckpoint
 
-from keyin.data.hdf5 import remove_stale_temporaries
 from keyin.errors import KeyinError
+from keyin.io import remove_stale_temporaries
 from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
 

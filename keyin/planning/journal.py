@@ -13,8 +13,8 @@ import os
 from pathlib import Path
 from typing import Any, Mapping
 
-from keyin.data.hdf5 import atomic_write_text
 from keyin.errors import ConfigError, DatasetFormatError
+from keyin.io import atomic_write_text
 
 
 def parse_journal(path: Path) -> tuple[list[dict[str, Any]], str, str]:

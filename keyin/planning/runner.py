@@ -19,7 +19,6 @@ from typing import Any, Sequence
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from keyin.data.generate import exit_with_parent
 from keyin.data.pushing import PushingGenerator
 from keyin.eval.planning import episode_outcome, successes
 from keyin.envs.layout import Layout
@@ -28,6 +27,7 @@ from keyin.planning.journal import append_record, read_journal
 from keyin.planning.servo import ServoParams
 from keyin.planning.tasks import PlanningTask, start_task
 from keyin.viz.planning import save_plan_pictures
+from keyin.workers import exit_with_parent
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from keyin.cli.app import fail_if_refused
 from keyin.data import hdf5
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.generate import generate_dataset
+from keyin.io import TEMPORARY_TAG
 from tests.cli.runner import error_line, last_json, run
 from tests.faults import fill_disk_on, make_read_only, refuse
 
@@ -104,7 +105,7 @@ BAD_INPUTS = [
 
 def half_written(root):
     """Files a failed command must not leave: temporaries of atomic writes, results."""
-    return sorted(p for p in root.rglob("*") if hdf5.TEMPORARY_TAG in p.name or p.name == "metrics.json")
+    return sorted(p for p in root.rglob("*") if TEMPORARY_TAG in p.name or p.name == "metrics.json")
 
 
 QUIET = {"eval": "progress=false", "generate": "progress=false", "train": "logger=none"}

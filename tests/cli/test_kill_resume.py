@@ -21,7 +21,8 @@ import torch
 
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.generate import generate_dataset
-from keyin.data.hdf5 import TEMPORARY_TAG, load_arrays, split_files
+from keyin.data.hdf5 import load_arrays, split_files
+from keyin.io import TEMPORARY_TAG
 from keyin.lit.checkpoints import load_checkpoint
 from tests.cli.runner import last_json, run
 

@@ -9,17 +9,9 @@ import pytest
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.clips import ShardClips
 from keyin.data.generate import generate_dataset
-from keyin.data.hdf5 import (
-    TEMPORARY_TAG,
-    check_compatible,
-    inspect_shard,
-    load_arrays,
-    remove_stale_temporaries,
-    sha256_of,
-    split_files,
-    write_shard,
-)
+from keyin.data.hdf5 import check_compatible, inspect_shard, load_arrays, split_files, write_shard
 from keyin.errors import DatasetFormatError, UnsafePathError
+from keyin.io import sha256_of
 
 ATTRS = {"generator": "test", "config": {"a": 1}, "seed": 3, "split": "test", "n_cond": 2}
 
@@ -154,15 +146,6 @@ def test_a_failed_write_keeps_the_old_file_names_the_path_and_leaves_no_temporar
         write_shard(path, arrays(n=5), ATTRS)
     assert failure.value.errno == errno.ENOSPC and failure.value.filename == str(path)
     assert [p.name for p in tmp_path.iterdir()] == ["a.h5"] and sha256_of(path) == checksum
-
-
-def test_stale_temporaries_of_dead_writers_are_removed_live_ones_kept(tmp_path):
-    dead = tmp_path / f".a.h5{TEMPORARY_TAG}99999999"  # no process has this id
-    live = tmp_path / f".b.h5{TEMPORARY_TAG}{os.getpid()}"
-    for path in (dead, live, tmp_path / "c.h5"):
-        path.write_bytes(b"partial")
-    assert remove_stale_temporaries(tmp_path) == [dead]
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "c.h5"])
 
 
 def test_a_file_without_clips_is_refused(tmp_path):

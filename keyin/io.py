@@ -1,0 +1,81 @@
+"""Generic file utilities: SHA-256 checksums, atomic writes through a temporary name and a rename,
+and the removal of the temporary files that killed writers left behind.
+
+A file being written is named ``.<name>.tmp-<pid>`` in its destination folder until its rename, so
+a reader sees it whole or not at all, and a later run knows from the PID whether its writer is gone.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+TEMPORARY_TAG = ".tmp-"  # a file being written is named .<name>.tmp-<pid> until its rename
+
+
+def sha256_of(path: Path) -> str:
+    """Hex SHA-256 of a file, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def temporary_path(path: Path) -> Path:
+    """Where ``path`` is written before the rename: a hidden name in the same folder with our PID."""
+    return path.with_name(f".{path.name}{TEMPORARY_TAG}{os.getpid()}")
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file, fsync and a rename.
+
+    ``path`` either keeps its old content or gets all of ``data``; on an error (a full disk) the
+    temporary file is removed. Only a killed process leaves one, which
+    :func:`remove_stale_temporaries` clears on the next run.
+    """
+    path = Path(path)
+    tmp = temporary_path(path)
+    try:
+        with open(tmp, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except OSError as err:
+        if err.filename is None:  # a failed write() names no file: name the one being written
+            raise OSError(err.errno, err.strerror, str(path)) from err
+        raise
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_write_bytes`)."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def process_alive(pid: int) -> bool:
+    """Whether a process with this id exists (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Delete the temporary files that killed writers left in ``folder``; returns them.
+
+    A temporary file whose writer (the PID in its name) still runs is kept.
+    """
+    folder, removed = Path(folder), []
+    for tmp in folder.glob(f".*{TEMPORARY_TAG}*") if folder.is_dir() else ():
+        pid = tmp.name.rpartition(TEMPORARY_TAG)[2]
+        if pid.isdigit() and not process_alive(int(pid)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
