@@ -87,11 +87,12 @@ def test_every_group_option_composes_and_resolves(root, group, option):
 
 
 @pytest.mark.parametrize("experiment", options("experiment"))
-@pytest.mark.parametrize("scale", options("scale"))
-def test_every_experiment_and_every_job_of_its_sweep_composes_at_every_scale(experiment, scale):
+def test_every_experiment_composes_at_every_scale_and_every_job_of_its_sweep_at_the_default(experiment):
     root = "plan" if experiment == "pushing_table2" else "train"
-    overrides = [f"experiment={experiment}"] + ([f"scale={scale}"] if root == "train" else [])
+    overrides = [f"experiment={experiment}"]
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        for scale in options("scale") if root == "train" else []:
+            resolve(root, [*overrides, f"scale={scale}"])
         sweep = compose(root, overrides=overrides, return_hydra_config=True).hydra.sweeper.params or {}
         jobs = [[f"{key}={value}"] for key, values in sweep.items() for value in str(values).split(",")]
         for job in jobs or [[]]:

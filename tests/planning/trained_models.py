@@ -6,7 +6,8 @@ from pathlib import Path
 import lightning as L
 import torch
 
-from keyin.lit.checkpoints import CONFIG_KEY, STAGE_KEY
+from keyin import __version__
+from keyin.lit.checkpoints import CONFIG_KEY, STAGE_KEY, VERSION_KEY
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.surprise import SurpriseModule
@@ -41,6 +42,7 @@ def save(module: L.LightningModule, path: Path, model: str, dataset: str = "push
         "state_dict": module.state_dict(),
         "hyper_parameters": dict(module.hparams),
         STAGE_KEY: module.stage,
+        VERSION_KEY: __version__,
         CONFIG_KEY: {"model": {"name": model}, "dataset": {"name": dataset}},
     }, path)
     return str(path)
