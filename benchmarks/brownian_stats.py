@@ -23,7 +23,7 @@ import torch
 
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.generate import generate_dataset, split_seed
-from keyin.eval.baselines import ConstantKeyframes, RandomKeyframes
+from keyin.decode.baselines import ConstantKeyframes, RandomKeyframes
 from keyin.eval.f1 import keyframe_scores
 
 DATA_SEED = 0  # keyin/conf/dataset/brownian.yaml

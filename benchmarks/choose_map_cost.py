@@ -22,8 +22,10 @@ from torch.utils.data import DataLoader, Subset
 from common import cpu_model, publish
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
+from keyin.decode.rules import with_sequence_ends
+from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
+from keyin.decode.segmentation import decode_by_length
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
-from keyin.eval.segmentation import boundary_segment_costs, decode_by_length, interpolation_costs, with_sequence_ends
 from keyin.lit.checkpoints import load_trained_module
 from keyin.losses.image import future_pixel_weights
 

@@ -3,7 +3,7 @@
     python benchmarks/segmentation_gate.py runs/<run>/checkpoints/interpolator/last.ckpt --clips 200
 
 Scores the first ``--clips`` test clips (``data/brownian`` test split; ``keyin-generate
-dataset=brownian 'splits={test: 1000}'`` writes it) with :mod:`keyin.eval.segmentation`, and
+dataset=brownian 'splits={test: 1000}'`` writes it) with :mod:`keyin.decode.segmentation`, and
 compares the summed interpolation BCE of three hard segmentations: the DP optimum, the ground
 truth, and Constant every ``c`` frames. Stage 2 can only discover what the DP finds.
 """
@@ -21,11 +21,12 @@ from torch.utils.data import Subset
 
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
-from keyin.eval.discovery import evaluate_discoverer
-from keyin.eval.f1 import keyframe_lists
-from keyin.eval.segmentation import SegmentationDiscoverer, best_segmentation, path_cost
+from keyin.decode.segment_costs import embedding_costs, interpolation_costs
+from keyin.decode.segmentation import best_segmentation, path_cost
+from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.interpolator import InterpolatorModule
+from keyin.losses.image import future_pixel_weights
 
 
 def main() -> None:
@@ -44,15 +45,22 @@ def main() -> None:
     clips = ShardClips(split_files(Path(args.data_dir), "test"), (hp.image_size, hp.image_size, hp.channels),
                        hp.n_cond, hp.n_future)
     clips = Subset(clips, range(min(args.clips, len(clips))))
-    discoverer = SegmentationDiscoverer(stage1, args.keyframes, args.space)
+    batch = next(iter(torch.utils.data.DataLoader(clips, batch_size=len(clips))))  # full-length clips
     started = time.perf_counter()
-    scores = evaluate_discoverer(discoverer, clips, hp.n_future, batch_size=len(clips))
-    seconds = time.perf_counter() - started
-    batch = next(iter(torch.utils.data.DataLoader(clips, batch_size=len(clips))))
-    costs = discoverer.last_costs
-    truth = keyframe_lists(batch["keyframes"])
-    constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(truth)
+    with torch.no_grad():
+        boundary_emb = stage1.encoder(batch["frames"])[:, hp.n_cond - 1 :]  # (B, N + 1, E)
+        if args.space == "embeddings":
+            costs = embedding_costs(stage1.interpolator, boundary_emb)
+        else:
+            weights = future_pixel_weights(stage1.pixel_weights(batch["frames"]), hp.n_cond)
+            costs = interpolation_costs(
+                stage1.interpolator, stage1.decoder, boundary_emb, batch["frames"][:, hp.n_cond :].flatten(2), weights
+            )
     _, dp_positions = best_segmentation(costs, args.keyframes)
+    seconds = time.perf_counter() - started
+    truth = keyframe_lists(batch["keyframes"])
+    scores = keyframe_scores(dp_positions, truth, hp.n_future)
+    constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(truth)
     dp = path_cost(costs, dp_positions)
     n_dp = sum(map(len, dp_positions)) / len(dp_positions)
     print(f"## Segmentation gate: {args.ckpt}\n")

@@ -39,9 +39,17 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
     return overrides
 
 
+# Classes that moved since keyin 0.1, old path → new path.
+MOVED_TARGETS = {f"keyin.eval.baselines.{name}": f"keyin.decode.baselines.{name}" for name in ("RandomKeyframes", "ConstantKeyframes")}
+
+
 def module_arguments(model: dict) -> dict:
-    """The constructor arguments of each module a model config builds (its name aside)."""
-    return {key: value for key, value in model.items() if key != "name"}
+    """The constructor arguments of each module a model config builds (its name aside), classes
+    named where they live now."""
+    return {
+        key: {**value, "_target_": MOVED_TARGETS.get(value["_target_"], value["_target_"])} if isinstance(value, dict) else value
+        for key, value in model.items() if key != "name"
+    }
 
 
 @pytest.mark.parametrize("command", sorted(OLD_COMMANDS))

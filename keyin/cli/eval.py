@@ -14,8 +14,8 @@ from keyin.cli.checks import check_common, require_int_at_least, require_positiv
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
+from keyin.decode.rules import SegmentationDiscoverer
 from keyin.eval.discovery import score_methods
-from keyin.eval.segmentation import SegmentationDiscoverer
 from keyin.eval.video import evaluate_video, save_rollouts
 from keyin.lit.checkpoints import load_trained_module
 
@@ -71,8 +71,8 @@ def evaluate(cfg: DictConfig) -> dict:
     metrics = score_methods(discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), **loader)
     if cfg.video_samples:
         torch.manual_seed(cfg.seed)  # the prior samples
-        metrics["video"] = evaluate_video(module, clips, cfg.video_samples, **loader)
-        save_rollouts(module, clips, cfg.video_samples, run_dir())
+        metrics["video"] = evaluate_video(module.model, clips, cfg.video_samples, **loader)
+        save_rollouts(module.model, clips, cfg.video_samples, run_dir())
     metrics.update(dataset=dataset.name, seed=cfg.seed)
     write_metrics(metrics, run_dir())
     return metrics

@@ -11,7 +11,6 @@ and the one for SSIM may differ); ``mean`` = averaged over samples and clips.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import torch
 from rich.progress import Progress
@@ -19,12 +18,11 @@ from torch import Tensor
 from torch.utils.data import DataLoader, Dataset
 from torchmetrics.functional.image import peak_signal_noise_ratio, structural_similarity_index_measure
 
+from keyin.decode.rules import keyin_keyframes
 from keyin.eval.f1 import keyframe_lists
 from keyin.losses.soft_keyframe import argmax_positions, valid_frame_mask
+from keyin.models import KEYIN
 from keyin.viz.keyframes import save_keyframe_pictures
-
-if TYPE_CHECKING:
-    from keyin.lit.keyframes import KeyframeModule
 
 PSNR_CAP = 100.0
 """dB, the PSNR of an exact match (MSE 0 gives +inf): means and the best of k stay finite."""
@@ -61,26 +59,28 @@ def clip_scores(predicted: Tensor, target: Tensor, future_length: Tensor) -> dic
     }
 
 
-def predict(
-    module: KeyframeModule, clips: Tensor, future_length: Tensor, mode: str, sample: bool
-) -> tuple[Tensor, Tensor]:
-    """A stage-2 module's argmax-offset video of each clip and its keyframe positions.
+def device_of(model: KEYIN) -> torch.device:
+    return next(model.parameters()).device
+
+
+def predict(model: KEYIN, clips: Tensor, future_length: Tensor, mode: str, sample: bool) -> tuple[Tensor, Tensor]:
+    """A KEYIN (or Jumpy, Static) model's argmax-offset video of each clip and its keyframe positions.
 
     Args:
-        module: a ``KeyframeModule`` in eval mode.
+        model: a trained :class:`keyin.models.KEYIN` in eval mode.
         clips: (B, L, C, H, W) in [0, 1]; the first n_cond frames condition the prediction.
         future_length: (B,).
-        mode, sample: as in ``KeyframeModule.forward``.
+        mode, sample: as in :meth:`keyin.models.KEYIN.forward`.
     Returns:
         (B, L, C, H, W) the conditioning frames then the predicted future; (B, M) keyframe
         positions (future indices).
     """
-    clips = clips.to(module.device)
-    out = module(clips, future_length.to(module.device), mode=mode, sample=sample)
-    return module.argmax_video(clips, out), argmax_positions(out["offset_probs"])
+    clips = clips.to(device_of(model))
+    out = model(clips, future_length.to(clips.device), mode=mode, sample=sample)
+    return model.argmax_video(clips, out), argmax_positions(out["offset_probs"])
 
 
-def score_batch(module: KeyframeModule, clips: Tensor, future_length: Tensor, k: int) -> dict[str, Tensor]:
+def score_batch(model: KEYIN, clips: Tensor, future_length: Tensor, k: int) -> dict[str, Tensor]:
     """Per-clip scores of the posterior-mean reconstruction and of k prior samples.
 
     Args:
@@ -89,11 +89,11 @@ def score_batch(module: KeyframeModule, clips: Tensor, future_length: Tensor, k:
     Returns:
         ``psnr``/``ssim`` (k, B) of the samples and ``psnr_posterior``/``ssim_posterior`` (B,).
     """
-    n_cond = module.hparams.stage1["n_cond"]
-    target = clips[:, n_cond:].to(module.device)
+    n_cond = model.n_cond
+    target = clips[:, n_cond:].to(device_of(model))
 
     def scores(mode: str, sample: bool) -> dict[str, Tensor]:
-        video, _ = predict(module, clips, future_length, mode, sample)
+        video, _ = predict(model, clips, future_length, mode, sample)
         return clip_scores(video[:, n_cond:], target, future_length)
 
     posterior = scores("posterior", False)
@@ -123,7 +123,7 @@ def summarize(scores: dict[str, Tensor]) -> dict[str, float | int]:
 
 @torch.no_grad()
 def evaluate_video(
-    module: KeyframeModule,
+    model: KEYIN,
     clips: Dataset,
     k: int,
     batch_size: int = 100,
@@ -136,15 +136,13 @@ def evaluate_video(
     with Progress(disable=not progress) as bar:
         task = bar.add_task(f"predicting videos ({k} samples)", total=len(clips))
         for batch in loader:
-            batches.append(score_batch(module, batch["frames"], batch["future_length"], k))
+            batches.append(score_batch(model, batch["frames"], batch["future_length"], k))
             bar.update(task, advance=len(batch["frames"]))
     return summarize({name: torch.cat([scores[name] for scores in batches], dim=-1) for name in batches[0]})
 
 
 @torch.no_grad()
-def save_rollouts(
-    module: KeyframeModule, clips: Dataset, k: int, folder: Path, count: int = 4
-) -> tuple[Path, Path]:
+def save_rollouts(model: KEYIN, clips: Dataset, k: int, folder: Path, count: int = 4) -> tuple[Path, Path]:
     """``rollouts.png`` and ``rollouts.gif``: for each of the first ``count`` clips, the truth
     (true keyframes marked), the posterior-mean reconstruction (its keyframes marked, hits in
     yellow) and the one of k prior samples with the highest PSNR (its own keyframes marked).
@@ -153,10 +151,10 @@ def save_rollouts(
         The PNG and GIF paths.
     """
     batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
-    frames, lengths = batch["frames"].to(module.device), batch["future_length"]
-    n_cond = module.hparams.stage1["n_cond"]
-    posterior, _ = predict(module, frames, lengths, "posterior", False)
-    samples = [predict(module, frames, lengths, "prior", True) for _ in range(k)]
+    frames, lengths = batch["frames"].to(device_of(model)), batch["future_length"]
+    n_cond = model.n_cond
+    posterior, _ = predict(model, frames, lengths, "posterior", False)
+    samples = [predict(model, frames, lengths, "prior", True) for _ in range(k)]
     psnr = torch.stack(
         [clip_scores(video[:, n_cond:], frames[:, n_cond:], lengths)["psnr"] for video, _ in samples]
     )  # (k, B)
@@ -164,7 +162,7 @@ def save_rollouts(
     best_video = torch.stack([samples[index][0][clip] for clip, index in enumerate(best)])
     best_positions = [samples[index][1][clip].tolist() for clip, index in enumerate(best)]
     truth = keyframe_lists(batch["keyframes"])
-    discovered = module.discover(frames, lengths, discovery="offsets")
+    discovered = keyin_keyframes(model, frames, lengths.to(frames.device), "offsets")
     rows = torch.stack([frames, posterior, best_video], dim=1).flatten(0, 1).cpu()  # (3·count, L, C, H, W)
     clips_truth = [marks for clip in range(len(best)) for marks in (truth[clip], truth[clip], [])]
     clips_predicted = [

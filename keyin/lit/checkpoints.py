@@ -20,6 +20,8 @@ VERSION_KEY = "keyin_version"
 # keyin 0.1 called KEYIN with our additions model=keyin; since 0.2 that is keyin_plus, and model=keyin
 # is the paper's method (named keyin_paper).
 LEGACY_MODEL_NAMES = {"keyin": "keyin_plus"}
+# keyin 0.1 kept stage 2's networks at the top of its LightningModule; since 0.2 they are its KEYIN model's.
+KEYIN_NETWORKS = ("encoder.", "decoder.", "interpolator.", "predictor.")
 PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
 
 
@@ -33,6 +35,12 @@ class RunConfigInCheckpoint(L.Callback):
         checkpoint[CONFIG_KEY] = self.config
         checkpoint[STAGE_KEY] = module.stage
         checkpoint[VERSION_KEY] = __version__
+
+
+def upgrade_state_dict(state_dict: Mapping[str, Any]) -> dict[str, Any]:
+    """A stage-2 state dict in this version's layout (``model.encoder.*``, ...); one of keyin 0.1
+    (``encoder.*``, ...) is renamed, one of today is returned as it is."""
+    return {f"model.{name}" if name.startswith(KEYIN_NETWORKS) else name: value for name, value in state_dict.items()}
 
 
 def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
@@ -69,6 +77,8 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
         ) from None
     if not isinstance(checkpoint, dict) or STAGE_KEY not in checkpoint:
         raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry); {PASS_A_CHECKPOINT}")
+    if checkpoint[STAGE_KEY] == "keyframes":
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"

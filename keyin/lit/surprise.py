@@ -3,7 +3,7 @@
 One stage: encoder, decoder and the SVG core learn to predict every frame from the one before and
 a latent from the posterior ``q(z_t | I_≤t)``, with a KL to the fixed prior N(0, I). Where the
 next frame is unpredictable (the ball turns) the posterior has to carry information, so its KL
-peaks; :mod:`keyin.eval.surprise` turns the peaks into keyframes.
+peaks; :mod:`keyin.decode.surprise` turns the peaks into keyframes.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import lightning as L
 import torch
 import torch.nn.functional as F
 
+from keyin.decode.surprise import surprise_keyframes
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.eval.surprise import surprise_keyframes
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models import ConvDecoder, ConvEncoder, SVGCore

@@ -318,6 +318,25 @@ def offset_teacher_loss(offset_logits: Tensor, target_offsets: Tensor) -> Tensor
     return F.cross_entropy(offset_logits.flatten(0, 1).float(), targets.flatten(), ignore_index=IGNORE_OFFSET)
 
 
+def boundary_teacher_loss(boundary_scores: Tensor, boundaries: Tensor, lengths: Tensor) -> Tensor:
+    """Binary cross-entropy of per-frame boundary scores to teacher boundaries (our addition).
+
+    Args:
+        boundary_scores: (B, N) boundary logits.
+        boundaries: (B, N) 0/1 targets.
+        lengths: (B,) valid future frames; padding gets no label.
+    Returns:
+        Scalar: mean over the valid frames.
+    """
+    valid = valid_frame_mask(lengths.to(boundary_scores.device), boundary_scores.shape[1])
+    return F.binary_cross_entropy_with_logits(boundary_scores[valid], boundaries.to(boundary_scores)[valid])
+
+
+def offset_entropy(offset_probs: Tensor) -> Tensor:
+    """(B, M) entropy in nats of each offset distribution δ (B, M, S)."""
+    return -(offset_probs * offset_probs.clamp_min(1e-12).log()).sum(-1)
+
+
 def argmax_positions(offset_probs: Tensor) -> Tensor:
     """Most likely position of each keyframe, from argmax offsets (REFERENCE §1, §3.9).
 

@@ -4,6 +4,7 @@ from keyin.models.attention import attention_posterior
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator, InterpolatorPosterior
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
+from keyin.models.keyin import KEYIN
 from keyin.models.recurrent import MLP, LSTMBlock, LSTMState, state_from_vector
 from keyin.models.svg import SVGCore
 from keyin.models.tap import TAPNetwork
@@ -12,6 +13,7 @@ __all__ = [
     "ConvDecoder",
     "ConvEncoder",
     "Interpolator",
+    "KEYIN",
     "InterpolatorPosterior",
     "KeyframeOutput",
     "KeyframePredictor",

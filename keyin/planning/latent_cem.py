@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from keyin.lit.keyframes import KeyframeModule
+from keyin.models import KEYIN
 from keyin.planning.cem import CEMParams, cem
 from keyin.planning.servo import subgoal_pixels
 from keyin.planning.subgoals import Subgoals
@@ -74,26 +75,25 @@ def plan_keyframes(
 
 
 class PriorKeyframes:
-    """A :data:`KeyframeRenderer`: a stage-2 model in prior mode from one start image, deterministic
+    """A :data:`KeyframeRenderer`: a KEYIN model in prior mode from one start image, deterministic
     given z.
 
     Args:
-        module: a trained :class:`KeyframeModule` in eval mode.
+        model: a trained :class:`keyin.models.KEYIN` (or Jumpy's) in eval mode.
         start: (H, W, 3) uint8, used as every conditioning frame (pushing has one).
     """
 
-    def __init__(self, module: KeyframeModule, start: np.ndarray) -> None:
-        self.module = module
-        frames = conditioning_frames(start, module.encoder.image_shape, module.hparams.stage1["n_cond"])
+    def __init__(self, model: KEYIN, start: np.ndarray) -> None:
+        self.model = model
+        frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond)
         with torch.no_grad():
-            self.cond_emb = module.encoder(frames)  # (1, n_cond, E)
+            self.cond_emb = model.encoder(frames)  # (1, n_cond, E)
 
     @torch.no_grad()
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
         latents = torch.as_tensor(z, dtype=torch.float32)  # (n, L, Zk)
-        keys = self.module.predictor(self.cond_emb.expand(len(latents), -1, -1), mode="prior", z=latents)
-        embeddings = keys.key_emb[:, -1:] if last_only else keys.key_emb  # (n, K, E)
-        return tensor_to_images(torch.sigmoid(self.module.decoder(embeddings)))  # (n, K, H, W, C)
+        images = self.model.keyframe_images(self.cond_emb.expand(len(latents), -1, -1), latents, last_only)
+        return tensor_to_images(images)  # (n, K, H, W, C)
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ class LatentCEMSubgoals(LatentCEMPlanner):
     stage: ClassVar[str] = "keyframes"
 
     def renderer(self, module: KeyframeModule, start: np.ndarray) -> KeyframeRenderer:
-        return PriorKeyframes(module, start)
+        return PriorKeyframes(module.model, start)
 
     def latent_shape(self, module: KeyframeModule) -> tuple[int, int]:
-        return module.predictor.n_keyframes, module.predictor.latent_dim
+        return module.model.predictor.n_keyframes, module.model.predictor.latent_dim

@@ -7,7 +7,7 @@ goal image: the cost and the CEM are KEYIN's (:class:`keyin.planning.latent_cem.
 The best rollout is then decoded whole, the inference network is run on the produced sequence
 ("to find the keyframes in a sequence sampled from the prior, we run the inference network on the
 produced sequence"), and its M surprise keyframes (the KL peaks of
-:func:`keyin.eval.surprise.surprise_keyframes`, with the model's shift) are the subgoals.
+:func:`keyin.decode.surprise.surprise_keyframes`, with the model's shift) are the subgoals.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import ClassVar
 import numpy as np
 import torch
 
-from keyin.eval.surprise import surprise_keyframes
+from keyin.decode.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule
 from keyin.planning.latent_cem import LatentCEMPlanner
 from keyin.planning.trained import conditioning_frames, tensor_to_images

@@ -63,7 +63,7 @@ def test_frozen_stage1_weights_are_unchanged_by_stage2(trained):
     frozen = [k for k in stage1 if k.split(".")[0] in ("encoder", "decoder", "interpolator")]
     assert frozen
     for key in frozen:
-        torch.testing.assert_close(stage1[key], stage2[key], rtol=0, atol=0)
+        torch.testing.assert_close(stage1[key], stage2[f"model.{key}"], rtol=0, atol=0)
 
 
 def test_eval_of_the_checkpoint_matches_the_training_run(trained):

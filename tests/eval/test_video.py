@@ -6,7 +6,7 @@ import imageio.v3 as iio
 import torch
 
 from keyin.eval.video import PSNR_CAP, clip_scores, save_rollouts, score_batch, summarize
-from keyin.lit.keyframes import KeyframeModule
+from keyin.models import KEYIN
 from tests.lit.test_keyframe_teacher import keyframe_module
 
 LENGTHS = torch.tensor([4, 2])  # valid future frames of the two clips (N = 4)
@@ -70,9 +70,9 @@ def test_a_clip_without_valid_frames_is_left_out_of_the_means():
     assert math.isclose(summary["psnr_mean"], 20.0, abs_tol=1e-3)
 
 
-def rgb_module() -> KeyframeModule:
-    """A small stage-2 module on frames of the pushing size, 64x64 RGB (N = 4 of STAGE1's 6)."""
-    return keyframe_module(0.0, image_size=64, channels=3).eval()
+def rgb_model() -> KEYIN:
+    """A small KEYIN model on frames of the pushing size, 64x64 RGB (N = 4 of STAGE1's 6)."""
+    return keyframe_module(0.0, image_size=64, channels=3).eval().model
 
 
 def rgb_clips(noisy_padding: bool = False) -> torch.Tensor:
@@ -84,11 +84,11 @@ def rgb_clips(noisy_padding: bool = False) -> torch.Tensor:
 
 
 def test_rgb_scores_are_seeded_and_ignore_the_padding():
-    module = rgb_module()
+    model = rgb_model()
     runs = []
     for clips in (rgb_clips(), rgb_clips(noisy_padding=True)):
         torch.manual_seed(5)
-        runs.append(score_batch(module, clips, LENGTHS, k=2))
+        runs.append(score_batch(model, clips, LENGTHS, k=2))
     for name in ("psnr", "ssim"):
         assert runs[0][name].shape == (2, 2) and runs[0][f"{name}_posterior"].shape == (2,)
         assert bool(runs[0][name].isfinite().all())
@@ -101,9 +101,9 @@ def test_rollouts_show_truth_reconstruction_and_best_sample_per_clip(tmp_path):
     keyframes = torch.zeros(2, 4, dtype=torch.bool)
     keyframes[:, 1] = True
     clips = [dict(frames=f, future_length=n, keyframes=k) for f, n, k in zip(rgb_clips(), LENGTHS, keyframes)]
-    module = rgb_module()
+    model = rgb_model()
     torch.manual_seed(0)
-    png, gif = save_rollouts(module, clips, k=2, folder=tmp_path)
+    png, gif = save_rollouts(model, clips, k=2, folder=tmp_path)
     assert iio.imread(png).shape == (3 * 2 * 68, 6 * 68, 3)  # a row per clip and kind, 2-pixel borders
     movie = iio.imread(gif, index=None)
     assert movie.shape[:3] == (6, 3 * 68 * 3, 2 * 68 * 3)  # each clip's three rows in one column, 3x

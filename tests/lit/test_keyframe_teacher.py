@@ -44,8 +44,8 @@ def test_teacher_adds_an_offset_cross_entropy_that_trains_the_predictor_only():
     assert torch.isclose(terms["loss"], plain["loss"] + 10.0 * terms["teacher"])
     module.zero_grad()
     terms["teacher"].backward()
-    assert module.predictor.offset_head.weight.grad.abs().sum() > 0
-    frozen = [*module.encoder.parameters(), *module.decoder.parameters(), *module.interpolator.parameters()]
+    assert module.model.predictor.offset_head.weight.grad.abs().sum() > 0
+    frozen = [*module.model.encoder.parameters(), *module.model.decoder.parameters(), *module.model.interpolator.parameters()]
     assert all(p.grad is None for p in frozen)
 
 
@@ -59,15 +59,15 @@ def test_with_offset_evidence_the_teacher_also_trains_the_boundary_scores():
     terms = module._shared_step(batch(), "train")
     module.zero_grad()
     terms["teacher"].backward()
-    assert module.predictor.boundary_head.weight.grad.abs().sum() > 0
-    assert module.predictor.boundary_head.bias.grad.abs() > 0
+    assert module.model.predictor.boundary_head.weight.grad.abs().sum() > 0
+    assert module.model.predictor.boundary_head.bias.grad.abs() > 0
 
 
 def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored():
     module = keyframe_module(0.0, offset_evidence=True, discovery="boundaries")
     with torch.no_grad():
-        module.predictor.boundary_head.bias.fill_(-5.0)  # no boundary anywhere but where the
-        module.predictor.boundary_head.weight.zero_()  # per-frame scores are forced below
+        module.model.predictor.boundary_head.bias.fill_(-5.0)  # no boundary anywhere but where the
+        module.model.predictor.boundary_head.weight.zero_()  # per-frame scores are forced below
     assert list(module.discoverers("keyin")) == ["keyin", "keyin_offsets", "keyin_map"]
     data = batch()
     found = module.discover(data["frames"], data["future_length"])

@@ -70,7 +70,7 @@ def test_stage2_loss_teacher_and_attention_ignore_the_padding(foreground_weight)
         torch.manual_seed(2)
         terms = module._shared_step(batch, "train")
         torch.manual_seed(2)
-        attention = module(batch["frames"], batch["future_length"])["attention"].detach()
+        attention = module.model(batch["frames"], batch["future_length"])["attention"].detach()
         results.append((terms["loss"], terms["teacher"], attention))
     (loss, teacher, attention), (noisy_loss, noisy_teacher, noisy_attention) = results
     assert torch.equal(loss, noisy_loss) and torch.equal(teacher, noisy_teacher)

@@ -2,7 +2,7 @@
 
 import torch
 
-from keyin.eval.surprise import surprise_keyframes
+from keyin.decode.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule, kl_schedule
 
 

@@ -5,7 +5,7 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from keyin.eval.segmentation import interpolation_costs
+from keyin.decode.segment_costs import interpolation_costs
 from keyin.losses.image import changed_pixel_weights, future_pixel_weights, model_pixel_weights
 from keyin.losses.soft_keyframe import bce_sum
 from keyin.losses.tap import frame_bce

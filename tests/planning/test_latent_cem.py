@@ -77,7 +77,7 @@ def test_a_goal_without_a_puck_is_refused():
 
 
 def test_prior_keyframes_are_deterministic_given_z_and_independent_of_the_batch():
-    render = PriorKeyframes(keyframe_module().eval(), disc_images(np.array([8.0, 8.0]), SIZE))
+    render = PriorKeyframes(keyframe_module().eval().model, disc_images(np.array([8.0, 8.0]), SIZE))
     z = np.random.default_rng(0).standard_normal((5, KEYFRAMES, KEY_LATENT))
     keyframes = render(z, False)
     assert keyframes.shape == (5, KEYFRAMES, SIZE, SIZE, 3) and keyframes.dtype == np.uint8

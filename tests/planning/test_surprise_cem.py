@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from keyin.eval.surprise import surprise_keyframes
+from keyin.decode.surprise import surprise_keyframes
 from keyin.planning.surprise_cem import SurpriseRollouts, SurpriseSubgoals
 from keyin.planning.trained import images_to_tensor, tensor_to_images
 from tests.planning.test_latent_cem import THREADS, disc_images

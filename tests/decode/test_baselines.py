@@ -1,6 +1,6 @@
 import torch
 
-from keyin.eval.baselines import ConstantKeyframes, RandomKeyframes
+from keyin.decode.baselines import ConstantKeyframes, RandomKeyframes
 
 
 def test_random_picks_distinct_frames_inside_each_clip_reproducibly():

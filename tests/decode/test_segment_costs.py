@@ -2,7 +2,7 @@
 
 import torch
 
-from keyin.eval.segmentation import boundary_segment_costs
+from keyin.decode.segment_costs import boundary_segment_costs
 
 
 def test_boundary_costs_stay_on_the_device_of_the_scores():

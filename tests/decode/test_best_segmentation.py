@@ -3,17 +3,9 @@ import itertools
 import pytest
 import torch
 
-from keyin.eval.segmentation import (
-    best_segmentation,
-    boundary_keyframes,
-    interpolation_costs,
-    map_keyframes,
-    path_cost,
-    segment_starts_offsets,
-    segmentation_offsets,
-    with_sequence_ends,
-    SegmentationDiscoverer,
-)
+from keyin.decode.rules import SegmentationDiscoverer, boundary_keyframes, map_keyframes, with_sequence_ends
+from keyin.decode.segment_costs import interpolation_costs
+from keyin.decode.segmentation import best_segmentation, path_cost, segment_starts_offsets, segmentation_offsets
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
 

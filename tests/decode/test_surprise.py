@@ -2,7 +2,7 @@
 
 import torch
 
-from keyin.eval.surprise import peak_indices, surprise_keyframes, surprise_positions
+from keyin.decode.surprise import peak_indices, surprise_keyframes, surprise_positions
 
 
 def curve(*values: float) -> torch.Tensor:

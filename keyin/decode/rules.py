@@ -1,0 +1,174 @@
+"""Keyframe rules built on the exact segmentation: ``boundaries``, ``map`` and the stage-1 gate.
+
+KEYIN's stage 2 can only find keyframes that make the frozen interpolator's job easier. Given the
+true frames, the best it could possibly do is the hard segmentation that minimises the summed
+interpolation BCE; its F1 against the ground truth measures whether an interpolator is good enough
+for stage 2 to discover the ground truth, before stage 2 is trained (PROTOTYPE-FINDINGS §4).
+Every rule returns, per clip, keyframe positions inside the clip's valid frames.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor
+
+from keyin.decode.offsets import offset_keyframes
+from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
+from keyin.decode.segmentation import decode_by_length
+from keyin.losses.image import future_pixel_weights
+from keyin.models.keyin import KEYIN
+
+KEYIN_RULES = ("offsets", "boundaries", "map")
+
+
+def boundary_keyframes(scores: Tensor, lengths: Tensor, n_keyframes: int, max_offset: int) -> list[list[int]]:
+    """The most likely keyframe positions under per-frame boundary scores, at most M gaps of at most S.
+
+    Args:
+        scores: (B, N) boundary logits; lengths: (B,) valid future frames.
+    Returns:
+        Per clip, the interior keyframe positions (the clip's last frame is never one).
+    """
+    return decode_by_length(
+        lambda rows, length: boundary_segment_costs(scores[rows, :length].detach().float(), max_offset),
+        lengths, n_keyframes, max_offset,
+    )
+
+
+def with_sequence_ends(positions: list[list[int]], lengths: Tensor, n_future: int) -> list[list[int]]:
+    """Add the last valid frame of every clip that ends inside the window as a keyframe.
+
+    A segmentation closes each clip at its last valid frame. Where the sequence ends before N
+    (a demonstration that finished: the rest is padding) that closing boundary is the end of the
+    last subgoal, a keyframe of the data; where the clip fills the window, the window cut the
+    sequence and its last frame is no event. Full-length datasets (Brownian) are unchanged.
+
+    Args:
+        positions: per clip, interior keyframe positions; lengths: (B,) valid future frames.
+    Returns:
+        Per clip, the positions with ``length - 1`` appended for clips with ``0 < length < n_future``.
+    """
+    return [
+        row + [length - 1] if 0 < length < n_future else row
+        for row, length in zip(positions, lengths.tolist())
+    ]
+
+
+@torch.no_grad()
+def map_keyframes(
+    interpolator: torch.nn.Module,
+    decoder: torch.nn.Module,
+    boundary_emb: Tensor,
+    frames: Tensor,
+    lengths: Tensor,
+    n_keyframes: int,
+    keyframe_cost: float,
+    scores: Tensor | None = None,
+    boundary_weight: float = 0.0,
+    weights: Tensor | None = None,
+) -> list[list[int]]:
+    """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
+    optionally, the keyframe predictor's boundary scores as a prior.
+
+    Minimises ``Σ_segments BCE + keyframe_cost · (#keyframes) − boundary_weight · Σ_keyframes s``
+    exactly (our discovery rule "map", docs/decisions.md).
+
+    Args:
+        boundary_emb: (B, N + 1, E) embeddings on the extended index; frames: (B, N, D) in [0, 1].
+        lengths: (B,) valid future frames.
+        scores: (B, N) boundary logits, or None for the interpolation cost alone.
+        weights: (B, N, D) pixel weights of the frames, None for the plain BCE.
+    Returns:
+        Per clip, the interior keyframe positions.
+    """
+    max_offset = interpolator.max_offset
+
+    def segment_costs(rows: Tensor, length: int) -> Tensor:
+        rows = rows.to(boundary_emb.device)
+        costs = interpolation_costs(
+            interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
+            None if weights is None else weights[rows, :length],
+        )
+        if scores is not None and boundary_weight:
+            costs = costs + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset)
+        return costs  # best_segmentation moves it to the CPU
+
+    return decode_by_length(segment_costs, lengths.cpu(), n_keyframes, max_offset, keyframe_cost)
+
+
+class SegmentationDiscoverer:
+    """Keyframes = the exact best segmentation under a trained stage-1 model (see module doc); what
+    ``keyin-eval ckpt=<stage-1 checkpoint>`` scores.
+
+    Args:
+        stage1: an :class:`keyin.lit.interpolator.InterpolatorModule` (frozen, eval mode).
+        n_keyframes: M.
+    """
+
+    def __init__(self, stage1: torch.nn.Module, n_keyframes: int) -> None:
+        self.stage1, self.n_keyframes = stage1.eval(), n_keyframes
+
+    @torch.no_grad()
+    def __call__(self, clips: Tensor, future_length: Tensor) -> list[list[int]]:
+        """Keyframe positions of (B, L, C, H, W) clips with (B,) valid future frames, each clip
+        segmented within its own frames by the pixel BCE of its interpolations
+        (:func:`with_sequence_ends` adds the end of a sequence that stops inside the window)."""
+        n_cond = self.stage1.hparams.n_cond
+        boundary_emb = self.stage1.encoder(clips)[:, n_cond - 1 :]  # (B, N + 1, E)
+        frames = clips[:, n_cond:].flatten(2)
+        weights = future_pixel_weights(self.stage1.pixel_weights(clips), n_cond)
+
+        def segment_costs(rows: Tensor, length: int) -> Tensor:
+            rows = rows.to(boundary_emb.device)
+            return interpolation_costs(
+                self.stage1.interpolator, self.stage1.decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
+                None if weights is None else weights[rows, :length],
+            )
+
+        lengths = future_length.cpu()
+        positions = decode_by_length(segment_costs, lengths, self.n_keyframes, self.stage1.interpolator.max_offset)
+        return with_sequence_ends(positions, lengths, frames.shape[1])
+
+
+@torch.no_grad()
+def keyin_keyframes(
+    model: KEYIN,
+    clips: Tensor,
+    future_length: Tensor,
+    rule: str = "offsets",
+    keyframe_cost: float = 0.0,
+    boundary_weight: float = 0.0,
+    pixel_weights: Tensor | None = None,
+) -> list[list[int]]:
+    """KEYIN's keyframes of clips, in posterior mode with the posterior mean, by one of its rules.
+
+    Args:
+        model: a trained :class:`keyin.models.KEYIN` in eval mode.
+        clips: (B, L, C, H, W) in [0, 1]; future_length: (B,) valid future frames.
+        rule: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9),
+            "boundaries" (with offset evidence: the most likely keyframe set under LSTM_inf's
+            per-frame boundary scores, within M gaps of at most S) or "map" (the exact best
+            segmentation under the frozen interpolator's pixel BCE with ``keyframe_cost`` per
+            keyframe, plus ``boundary_weight`` times the boundary scores where there are any).
+        pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
+    Returns:
+        Per clip, the keyframe positions inside its valid frames; "boundaries" and "map" add the
+        end of a sequence that stops inside the window (:func:`with_sequence_ends`).
+    """
+    if rule not in KEYIN_RULES:
+        raise ValueError(f"rule must be one of {KEYIN_RULES}, got {rule!r}")
+    embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False)
+    if rule == "offsets":
+        return offset_keyframes(keys.offset_probs, future_length)
+    n_future, lengths = clips.shape[1] - model.n_cond, future_length.cpu()
+    if rule == "boundaries":
+        if keys.boundary_scores is None:
+            raise ValueError("rule 'boundaries' needs the boundary scores of offset_evidence")
+        interior = boundary_keyframes(keys.boundary_scores, lengths, model.predictor.n_keyframes, model.predictor.max_offset)
+    else:
+        interior = map_keyframes(
+            model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
+            future_length, model.predictor.n_keyframes, keyframe_cost, keys.boundary_scores, boundary_weight,
+            weights=pixel_weights,
+        )
+    return with_sequence_ends(interior, lengths, n_future)

@@ -1,0 +1,147 @@
+"""Exact best segmentation of a clip (dynamic programming): the core of KEYIN's decodings.
+
+Keyframes at extended indices ``0 = k_0 < k_1 < … < k_m = N`` (``k = 0`` is K^0, the last
+conditioning frame; ``k = j + 1`` is future position ``j``), each gap ``≤ S`` and ``m ≤ M``: the
+segmentation of least summed segment cost is a shortest path over (index, count), solved exactly.
+The segment costs come from :mod:`keyin.decode.segment_costs`; the rules that use them (the
+teacher, ``boundaries``, ``map``, the stage-1 gate) from :mod:`keyin.decode.rules`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import torch
+from torch import Tensor
+
+from keyin.losses.soft_keyframe import IGNORE_OFFSET
+
+
+def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tensor]:
+    """Every segment that lies inside the clip, on the extended index.
+
+    Returns:
+        start (R,), offset (R,) int64 with ``0 <= start``, ``1 <= offset <= S``,
+        ``start + offset <= N``; ordered by start, then offset.
+    """
+    start = torch.arange(n_future).repeat_interleave(max_offset)
+    offset = torch.arange(1, max_offset + 1).repeat(n_future)
+    inside = start + offset <= n_future
+    return start[inside], offset[inside]
+
+
+def best_segmentation(costs: Tensor, n_keyframes: int, keyframe_cost: float = 0.0) -> tuple[Tensor, list[list[int]]]:
+    """Minimum-cost segmentation of ``0 … N`` into at most M gaps of at most S (exact DP).
+
+    Args:
+        costs: (B, N, S) cost of the segment from extended index ``a`` with offset ``o = s + 1``;
+            ``inf`` where ``a + o > N``.
+        n_keyframes: M, the most segments (keyframes) allowed.
+        keyframe_cost: a price per segment (per keyframe, the closing one included). At 0 the
+            optimum of an interpolation cost uses every gap it may, since a shorter segment is
+            always a little easier; a price keeps only the keyframes that pay for themselves.
+    Returns:
+        total (B,) the minimum summed cost, and per clip the keyframe *positions* (future frame
+        indices ``k - 1``) of the interior boundaries, the final boundary at ``N - 1`` excluded.
+    Raises:
+        ValueError: if M·S < N (no segmentation exists).
+    """
+    batch, n_future, max_offset = costs.shape
+    if n_keyframes * max_offset < n_future:
+        raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
+    costs = costs.cpu() + keyframe_cost
+    # best[m, b, k]: cheapest cover of 0…k by exactly m gaps; back[m, b, k]: the gap's offset.
+    best = torch.full((n_keyframes + 1, batch, n_future + 1), float("inf"), dtype=costs.dtype)
+    back = torch.zeros((n_keyframes + 1, batch, n_future + 1), dtype=torch.long)
+    best[0, :, 0] = 0.0
+    for m in range(1, n_keyframes + 1):
+        for k in range(1, n_future + 1):
+            offsets = torch.arange(1, min(max_offset, k) + 1)  # gap ending at k
+            candidates = best[m - 1][:, k - offsets] + costs[:, k - offsets, offsets - 1]  # (B, o)
+            best[m, :, k], arg = candidates.min(dim=1)
+            back[m, :, k] = offsets[arg]
+    total, n_gaps = best[:, :, n_future].min(dim=0)  # over m
+    positions: list[list[int]] = []
+    for b in range(batch):
+        k, m, boundaries = n_future, int(n_gaps[b]), []
+        while m > 0:
+            boundaries.append(k)
+            k -= int(back[m, b, k])
+            m -= 1
+        positions.append(sorted(index - 1 for index in boundaries if index < n_future))
+    return total, positions
+
+
+def decode_by_length(
+    segment_costs: Callable[[Tensor, int], Tensor],
+    lengths: Tensor,
+    n_keyframes: int,
+    max_offset: int,
+    keyframe_cost: float = 0.0,
+) -> list[list[int]]:
+    """Best segmentation of clips of different valid lengths, each closing at its own last frame.
+
+    Args:
+        segment_costs: ``(rows, length) -> (R, length, S)`` costs of the clips ``rows`` (all of
+            valid length ``length``), cut to that length.
+        lengths: (B,) valid future frames.
+        keyframe_cost: see :func:`best_segmentation`.
+    Returns:
+        Per clip, the interior keyframe positions.
+    """
+    positions: list[list[int]] = [[] for _ in range(len(lengths))]
+    for length in lengths.unique().tolist():
+        if length < 1:
+            continue
+        if n_keyframes * max_offset < length:
+            raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover a clip of {length} frames")
+        rows = (lengths == length).nonzero().flatten()
+        _, decoded = best_segmentation(segment_costs(rows, length), n_keyframes, keyframe_cost)
+        for row, clip_positions in zip(rows.tolist(), decoded):
+            positions[row] = clip_positions
+    return positions
+
+
+def _gaps(row: list[int], n_future: int) -> list[tuple[int, int]]:
+    """(extended start index, offset) of each gap between K^0, the positions in ``row`` and the
+    closing boundary at ``N - 1``."""
+    boundaries = [0, *(p + 1 for p in row), n_future]
+    return [(left, right - left) for left, right in zip(boundaries[:-1], boundaries[1:])]
+
+
+def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
+    """Summed cost of given keyframe positions, closed by a final boundary at ``N - 1``.
+
+    Args:
+        costs: (B, N, S) from :func:`interpolation_costs`.
+        positions: per clip, increasing future positions in ``0 … N-2``.
+    Returns:
+        (B,) total cost; ``inf`` where a gap exceeds S.
+    """
+    batch, n_future, max_offset = costs.shape
+    totals = torch.zeros(batch, dtype=costs.dtype)
+    for b, row in enumerate(positions):
+        for left, gap in _gaps([p for p in row if p < n_future - 1], n_future):
+            totals[b] += costs[b, left, gap - 1] if 1 <= gap <= max_offset else float("inf")
+    return totals
+
+
+def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes: int) -> Tensor:
+    """Teacher offsets of the keyframes at given interior positions.
+
+    Args:
+        positions: per clip, increasing interior keyframe positions (as from
+            :func:`best_segmentation`).
+        n_future: N.
+        n_keyframes: M.
+    Returns:
+        (B, M) int64 offsets in 1…S for the interior keyframes; ``IGNORE_OFFSET`` for the rest.
+        The gap that closes the clip at ``N - 1`` gets no target: a keyframe there is no
+        discovered keyframe (the last frame is never one, and evaluation counts it as a false
+        positive), so where the chain goes after the last interior keyframe is left to the soft loss.
+    """
+    offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
+    for b, row in enumerate(positions):
+        interior = [gap for _, gap in _gaps(row, n_future)][: min(len(row), n_keyframes)]
+        offsets[b, : len(interior)] = torch.tensor(interior, dtype=torch.long)
+    return offsets

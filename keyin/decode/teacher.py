@@ -1,0 +1,44 @@
+"""The segmentation teacher's targets (our addition, docs/decisions.md): the exact best segmentation
+of each clip under KEYIN's own frozen interpolator, turned into offsets and per-frame boundaries.
+
+No ground-truth keyframe enters: the segmentation minimises the interpolation error between the
+clip's true frames in embedding space (the decoder-free, cheap segment cost). The losses that use
+the targets are :func:`keyin.losses.soft_keyframe.offset_teacher_loss` and
+:func:`keyin.losses.soft_keyframe.boundary_teacher_loss`.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor
+
+from keyin.decode.segment_costs import embedding_costs
+from keyin.decode.segmentation import decode_by_length, segmentation_offsets
+
+
+@torch.no_grad()
+def segmentation_targets(
+    interpolator: torch.nn.Module, boundary_emb: Tensor, lengths: Tensor, n_keyframes: int, keyframe_cost: float = 0.0
+) -> tuple[Tensor, Tensor]:
+    """Teacher offsets and boundary labels of clips, each segmented within its own valid frames.
+
+    Args:
+        interpolator: the frozen :class:`keyin.models.Interpolator`, run with z = 0.
+        boundary_emb: (B, N + 1, E) embeddings on the extended index (K^0, then the future frames).
+        lengths: (B,) valid future frames.
+        n_keyframes: M.
+        keyframe_cost: price per keyframe in the DP (0: every gap it may).
+    Returns:
+        offsets (B, M) int64 (``IGNORE_OFFSET`` where there is no interior keyframe) and
+        boundaries (B, N) float, 1 at the interior keyframes; both on ``boundary_emb``'s device.
+    """
+    n_future = boundary_emb.shape[1] - 1
+    positions = decode_by_length(
+        lambda rows, length: embedding_costs(interpolator, boundary_emb[rows.to(boundary_emb.device), : length + 1]),
+        lengths.cpu(), n_keyframes, interpolator.max_offset, keyframe_cost,
+    )
+    boundaries = torch.zeros(len(positions), n_future)
+    for row, clip_positions in enumerate(positions):
+        boundaries[row, clip_positions] = 1.0
+    offsets = segmentation_offsets(positions, n_future, n_keyframes)
+    return offsets.to(boundary_emb.device), boundaries.to(boundary_emb.device)
