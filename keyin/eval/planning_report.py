@@ -19,7 +19,7 @@ import numpy as np
 
 from keyin.eval.planning import OUTCOMES, planning_summary
 from keyin.eval.report import group_by_seed, is_planning, read_metrics
-from keyin.planning.journal import parse_journal
+from keyin.io import read_json_lines
 
 # Paper Table 2 (REFERENCE §5.3): position error mean, std and success rate in % (None: "-").
 PAPER_TABLE2 = {
@@ -68,7 +68,7 @@ def collect_planning(root: Path) -> list[dict[str, Any]]:
     for folder, metrics in read_metrics(root):
         if not is_planning(metrics):
             continue
-        records = sorted(parse_journal(folder / "tasks.jsonl")[0], key=lambda record: record["task"])
+        records = sorted(read_json_lines(folder / "tasks.jsonl")[0], key=lambda record: record["task"])
         tasks = records[: metrics["n_tasks"]]
         if len(tasks) < metrics["n_tasks"]:
             raise ValueError(

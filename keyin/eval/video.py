@@ -11,7 +11,7 @@ and the one for SSIM may differ); ``mean`` = averaged over samples and clips.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, Mapping, Protocol
 
 import torch
 from rich.progress import Progress
@@ -23,12 +23,35 @@ from keyin.eval.f1 import keyframe_lists
 from keyin.losses.soft_keyframe import argmax_positions, valid_frame_mask
 from keyin.viz.keyframes import save_keyframe_pictures
 
-if TYPE_CHECKING:
-    from keyin.lit.keyframes import KeyframeModule
-
 PSNR_CAP = 100.0
 """dB, the PSNR of an exact match (MSE 0 gives +inf): means and the best of k stay finite."""
 METRICS = ("psnr", "ssim")
+
+
+class KeyframeVideoModel(Protocol):
+    """What the diagnostics use of a stage-2 model (``keyin.lit.keyframes.KeyframeModule``)."""
+
+    @property
+    def device(self) -> torch.device:
+        """Where its weights are."""
+        ...
+
+    @property
+    def hparams(self) -> Mapping[str, Any]:
+        """Its settings; ``hparams["stage1"]["n_cond"]`` is the number of conditioning frames."""
+        ...
+
+    def __call__(self, clips: Tensor, future_length: Tensor, mode: str, sample: bool) -> dict[str, Tensor]:
+        """(B, L, C, H, W) clips, (B,) valid future lengths -> its outputs, ``offset_probs`` (B, M, S) among them."""
+        ...
+
+    def argmax_video(self, clips: Tensor, out: dict[str, Tensor]) -> Tensor:
+        """(B, L, C, H, W): the conditioning frames of ``clips``, then the argmax-offset future of ``out``."""
+        ...
+
+    def discover(self, clips: Tensor, future_length: Tensor, discovery: str) -> list[list[int]]:
+        """Per clip, its keyframes' future indices under the decoding rule ``discovery``."""
+        ...
 
 
 def frame_scores(predicted: Tensor, target: Tensor) -> dict[str, Tensor]:
@@ -62,15 +85,15 @@ def clip_scores(predicted: Tensor, target: Tensor, future_length: Tensor) -> dic
 
 
 def predict(
-    module: KeyframeModule, clips: Tensor, future_length: Tensor, mode: str, sample: bool
+    module: KeyframeVideoModel, clips: Tensor, future_length: Tensor, mode: str, sample: bool
 ) -> tuple[Tensor, Tensor]:
     """A stage-2 module's argmax-offset video of each clip and its keyframe positions.
 
     Args:
-        module: a ``KeyframeModule`` in eval mode.
+        module: a stage-2 model in eval mode.
         clips: (B, L, C, H, W) in [0, 1]; the first n_cond frames condition the prediction.
         future_length: (B,).
-        mode, sample: as in ``KeyframeModule.forward``.
+        mode, sample: "posterior" or "prior", and whether to sample the latents or take their means.
     Returns:
         (B, L, C, H, W) the conditioning frames then the predicted future; (B, M) keyframe
         positions (future indices).
@@ -80,7 +103,7 @@ def predict(
     return module.argmax_video(clips, out), argmax_positions(out["offset_probs"])
 
 
-def score_batch(module: KeyframeModule, clips: Tensor, future_length: Tensor, k: int) -> dict[str, Tensor]:
+def score_batch(module: KeyframeVideoModel, clips: Tensor, future_length: Tensor, k: int) -> dict[str, Tensor]:
     """Per-clip scores of the posterior-mean reconstruction and of k prior samples.
 
     Args:
@@ -89,7 +112,7 @@ def score_batch(module: KeyframeModule, clips: Tensor, future_length: Tensor, k:
     Returns:
         ``psnr``/``ssim`` (k, B) of the samples and ``psnr_posterior``/``ssim_posterior`` (B,).
     """
-    n_cond = module.hparams.stage1["n_cond"]
+    n_cond = module.hparams["stage1"]["n_cond"]
     target = clips[:, n_cond:].to(module.device)
 
     def scores(mode: str, sample: bool) -> dict[str, Tensor]:
@@ -123,7 +146,7 @@ def summarize(scores: dict[str, Tensor]) -> dict[str, float | int]:
 
 @torch.no_grad()
 def evaluate_video(
-    module: KeyframeModule,
+    module: KeyframeVideoModel,
     clips: Dataset,
     k: int,
     batch_size: int = 100,
@@ -143,7 +166,7 @@ def evaluate_video(
 
 @torch.no_grad()
 def save_rollouts(
-    module: KeyframeModule, clips: Dataset, k: int, folder: Path, count: int = 4
+    module: KeyframeVideoModel, clips: Dataset, k: int, folder: Path, count: int = 4
 ) -> tuple[Path, Path]:
     """``rollouts.png`` and ``rollouts.gif``: for each of the first ``count`` clips, the truth
     (true keyframes marked), the posterior-mean reconstruction (its keyframes marked, hits in
@@ -154,7 +177,7 @@ def save_rollouts(
     """
     batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
     frames, lengths = batch["frames"].to(module.device), batch["future_length"]
-    n_cond = module.hparams.stage1["n_cond"]
+    n_cond = module.hparams["stage1"]["n_cond"]
     posterior, _ = predict(module, frames, lengths, "posterior", False)
     samples = [predict(module, frames, lengths, "prior", True) for _ in range(k)]
     psnr = torch.stack(
