@@ -1,15 +1,22 @@
 """Generic file utilities: SHA-256 checksums, atomic writes through a temporary name and a rename,
-and the removal of the temporary files that killed writers left behind.
+the removal of the temporary files that killed writers left behind, and JSON-lines files that
+grow a whole line at a time.
 
 A file being written is named ``.<name>.tmp-<pid>`` in its destination folder until its rename, so
 a reader sees it whole or not at all, and a later run knows from the PID whether its writer is gone.
+A JSON-lines file gets each line in one ``write`` (flushed and fsynced), so a killed writer leaves at
+most one partial last line, without a newline, which :func:`read_json_lines` tells apart.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 from pathlib import Path
+from typing import Any, Mapping
+
+from keyin.errors import DatasetFormatError
 
 TEMPORARY_TAG = ".tmp-"  # a file being written is named .<name>.tmp-<pid> until its rename
 
@@ -79,3 +86,37 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
             tmp.unlink(missing_ok=True)
             removed.append(tmp)
     return removed
+
+
+def append_json_line(path: Path, record: Mapping[str, Any]) -> None:
+    """Append ``record`` to ``path`` as one JSON line (sorted keys), durably."""
+    with open(path, "a", encoding="utf-8") as handle:
+        handle.write(json.dumps(dict(record), sort_keys=True) + "\n")
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
+def read_json_lines(path: Path) -> tuple[list[dict[str, Any]], str, str]:
+    """The records of a JSON-lines file's complete lines, those lines' text, and a partial last line
+    ('' if none); no file gives none. The file is not touched.
+
+    Raises:
+        DatasetFormatError: a complete line that is not a JSON object (the file was edited).
+    """
+    path = Path(path)
+    if not path.is_file():
+        return [], "", ""
+    complete, _, partial = path.read_text(encoding="utf-8").rpartition("\n")
+    records = []
+    for number, line in enumerate(complete.splitlines() if complete else [], start=1):
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            record = None
+        if not isinstance(record, dict):
+            raise DatasetFormatError(
+                f"{path} line {number} is not a JSON object (the file was edited); delete that line to "
+                f"have its entry written again"
+            )
+        records.append(record)
+    return records, complete, partial

@@ -26,6 +26,7 @@ from keyin.eval.planning_report import (
     outcome_markdown,
     planning_csv,
     planning_markdown,
+    success_curves,
     summarise_planning,
     sweep_threshold,
 )
@@ -113,7 +114,7 @@ def planning_table(sweep: Path, out: Path, threshold: float | None) -> list[Path
     written = [out / "table2.md", out / "table2.csv"]
     atomic_write_text(written[0], text)
     atomic_write_text(written[1], planning_csv(rows, threshold))
-    written.append(save_success_curves(rows, threshold, out / "table2_success.png"))
+    written.append(save_success_curves(*success_curves(rows), threshold, out / "table2_success.png"))
     print(text)
     return written
 
@@ -130,7 +131,10 @@ def keyframe_table(sweep: Path, out: Path, n_examples: int) -> list[Path]:
     written = [out / "table1.md", out / "table1.csv"]
     atomic_write_text(written[0], header + markdown_table(rows))
     atomic_write_text(written[1], csv_table(rows))
-    written.append(save_f1_bars(rows, out / "table1_f1.png"))
+    written.append(save_f1_bars(
+        [row.dataset for row in rows], [row.method for row in rows], [row.mean["f1"] for row in rows],
+        [row.std["f1"] for row in rows], [row.paper_f1 for row in rows], out / "table1_f1.png",
+    ))
     for dataset in sorted({row.dataset for row in rows}):
         job, predicted, truth = example_predictions(records, dataset)
         if not predicted or not (job / ".hydra" / "config.yaml").is_file():

@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from keyin.eval.planning import OUTCOMES, planning_summary
+from keyin.eval.planning import OUTCOMES, planning_summary, success_curve
 from keyin.eval.report import group_by_seed, is_planning, read_metrics
-from keyin.planning.journal import parse_journal
+from keyin.io import read_json_lines
 
 # Paper Table 2 (REFERENCE §5.3): position error mean, std and success rate in % (None: "-").
 PAPER_TABLE2 = {
@@ -32,6 +32,7 @@ PAPER_TABLE2 = {
     "keyin": (0.50, 0.26, 64.2),
 }
 PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
+CURVE_END = 1.6  # world units: the success curves reach at least this threshold (past the initial distances)
 NOT_RECORDED = "not recorded"
 
 
@@ -68,7 +69,7 @@ def collect_planning(root: Path) -> list[dict[str, Any]]:
     for folder, metrics in read_metrics(root):
         if not is_planning(metrics):
             continue
-        records = sorted(parse_journal(folder / "tasks.jsonl")[0], key=lambda record: record["task"])
+        records = sorted(read_json_lines(folder / "tasks.jsonl")[0], key=lambda record: record["task"])
         tasks = records[: metrics["n_tasks"]]
         if len(tasks) < metrics["n_tasks"]:
             raise ValueError(
@@ -121,6 +122,19 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
             )
         )
     return rows
+
+
+def success_curves(rows: list[PlanningRow], points: int = 321) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Each planner's success rate against the success threshold (``table2_success.png``).
+
+    Returns:
+        (T,) thresholds from 0 to past the largest final error (at least ``CURVE_END``), and
+        ``"<planner> (<n> tasks)"`` → (T,) its success rate at each of them.
+    """
+    top = max(CURVE_END, max(float(row.errors.max()) for row in rows) + 0.05)
+    thresholds = np.linspace(0.0, top, points)
+    curves = {f"{row.planner} ({len(row.errors)} tasks)": success_curve(row.errors, thresholds) for row in rows}
+    return thresholds, curves
 
 
 def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:

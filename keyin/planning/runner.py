@@ -22,8 +22,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from keyin.data.pushing import PushingGenerator
 from keyin.eval.planning import episode_outcome, successes
 from keyin.envs.layout import Layout
+from keyin.io import append_json_line
 from keyin.planning.controllers import Controller, Outcome
-from keyin.planning.journal import append_record, read_journal
+from keyin.planning.journal import read_journal
 from keyin.planning.servo import ServoParams
 from keyin.planning.tasks import PlanningTask, start_task
 from keyin.viz.planning import save_plan_pictures
@@ -117,7 +118,7 @@ def run_tasks(
         handle = bar.add_task(f"{job.planner} -> {journal}", total=len(tasks), completed=len(records), **stats())
 
         def finished(record: dict[str, Any]) -> None:
-            append_record(journal, record)
+            append_json_line(journal, record)
             records[record["task"]] = record
             bar.update(handle, advance=1, **stats())
 

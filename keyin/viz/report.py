@@ -13,9 +13,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from keyin.eval.planning import success_curve  # noqa: E402
-from keyin.eval.planning_report import PlanningRow  # noqa: E402
-from keyin.eval.report import TableRow  # noqa: E402
 from keyin.viz.keyframes import marked_frames  # noqa: E402
 
 
@@ -28,19 +25,33 @@ def save_figure(fig: plt.Figure, path: Path, dpi: int) -> Path:
     return path
 
 
-def save_f1_bars(rows: Sequence[TableRow], path: Path) -> Path:
-    """Bars of our F1 (mean ± std over seeds) per method, the paper's F1 as a black tick."""
-    datasets = sorted({row.dataset for row in rows})
-    fig, axes = plt.subplots(1, len(datasets), figsize=(4.5 * len(datasets), 3.4), squeeze=False)
-    for ax, dataset in zip(axes[0], datasets):
-        mine = [row for row in rows if row.dataset == dataset]
+def save_f1_bars(
+    datasets: Sequence[str],
+    methods: Sequence[str],
+    means: Sequence[float],
+    stds: Sequence[float],
+    paper: Sequence[float | None],
+    path: Path,
+) -> Path:
+    """Bars of our F1 (mean ± std over seeds), one panel per dataset, the paper's F1 as a black tick.
+
+    Args:
+        datasets, methods: (n,) each bar's panel and label, drawn in this order within a panel.
+        means, stds: (n,) our F1 over seeds.
+        paper: (n,) the paper's F1, None where the paper has none.
+    """
+    if not len(datasets) == len(methods) == len(means) == len(stds) == len(paper):
+        raise ValueError("save_f1_bars needs one dataset, method, mean, std and paper F1 per bar")
+    panels = sorted(set(datasets))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.5 * len(panels), 3.4), squeeze=False)
+    for ax, dataset in zip(axes[0], panels):
+        mine = [i for i, name in enumerate(datasets) if name == dataset]  # its bars, in order
         x = np.arange(len(mine))
-        ax.bar(x, [r.mean["f1"] for r in mine], yerr=[r.std["f1"] for r in mine], capsize=3,
-               color="tab:blue", label="ours")
-        paper = [(i, r.paper_f1) for i, r in enumerate(mine) if r.paper_f1 is not None]
-        if paper:
-            ax.scatter(*zip(*paper), marker="_", s=400, color="black", linewidths=2, label="paper", zorder=3)
-        ax.set_xticks(x, [r.method for r in mine], rotation=30, ha="right")
+        ax.bar(x, [means[i] for i in mine], yerr=[stds[i] for i in mine], capsize=3, color="tab:blue", label="ours")
+        theirs = [(j, paper[i]) for j, i in enumerate(mine) if paper[i] is not None]
+        if theirs:
+            ax.scatter(*zip(*theirs), marker="_", s=400, color="black", linewidths=2, label="paper", zorder=3)
+        ax.set_xticks(x, [methods[i] for i in mine], rotation=30, ha="right")
         ax.set_ylim(0, 1)
         ax.set_ylabel("keyframe F1 (exact)")
         ax.set_title(dataset)
@@ -137,16 +148,21 @@ def save_surprise_curves(
     return save_figure(fig, path, dpi=100)
 
 
-def save_success_curves(rows: Sequence[PlanningRow], threshold: float, path: Path) -> Path:
+def save_success_curves(
+    thresholds: np.ndarray, curves: Mapping[str, np.ndarray], threshold: float, path: Path
+) -> Path:
     """Success rate against the success threshold (world units of final shortest-path error), one
-    line per planner; the threshold of the table dashed."""
-    top = max(1.6, max(float(row.errors.max()) for row in rows) + 0.05)
-    thresholds = np.linspace(0.0, top, 321)
+    line per planner; the threshold of the table dashed.
+
+    Args:
+        thresholds: (T,) increasing, from 0.
+        curves: legend label → (T,) success rate at each threshold.
+    """
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
-    for row in rows:
-        ax.plot(thresholds, success_curve(row.errors, thresholds), label=f"{row.planner} ({len(row.errors)} tasks)")
+    for label, rates in curves.items():
+        ax.plot(thresholds, rates, label=label)
     ax.axvline(threshold, color="black", linestyle="--", linewidth=1, label=f"threshold {threshold:g}")
-    ax.set_xlim(0, top)
+    ax.set_xlim(0, float(thresholds[-1]))
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("success threshold: final shortest-path error (world units)")
     ax.set_ylabel("success rate")

@@ -49,7 +49,7 @@ def hold_after_checkpoint() -> None:
 def hold_mid_journal_line(finished: int) -> None:
     from keyin.planning import runner
 
-    real_append, appended = runner.append_record, []
+    real_append, appended = runner.append_json_line, []
 
     def append(path, record):
         if len(appended) == finished:
@@ -60,7 +60,7 @@ def hold_mid_journal_line(finished: int) -> None:
         real_append(path, record)
         appended.append(record)
 
-    runner.append_record = append
+    runner.append_json_line = append
 
 
 def main(argv: list[str]) -> None:

@@ -12,6 +12,7 @@ from keyin.eval.planning_report import (
     outcome_markdown,
     planning_csv,
     planning_markdown,
+    success_curves,
     summarise_planning,
 )
 
@@ -60,6 +61,16 @@ def test_rows_pool_the_tasks_of_every_seed_in_the_papers_order(sweep):
     lines = planning_csv(rows, 0.66).splitlines()
     assert len(lines) == 4 and lines[0].startswith("planner,seeds,n_tasks,success_threshold,position_error_mean")
     assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.9,0.14,15.0")
+
+
+def test_the_success_curves_run_from_zero_past_every_error(sweep):
+    rows = summarise_planning(collect_planning(sweep), 0.66)
+    thresholds, curves = success_curves(rows, points=5)
+    np.testing.assert_allclose(thresholds, np.linspace(0.0, 1.6, 5))  # every error is below 1.55
+    assert list(curves) == ["initial (2 tasks)", "no_subgoals (4 tasks)", "demo_subgoals (2 tasks)"]
+    np.testing.assert_allclose(curves["no_subgoals (4 tasks)"], [0.0, 0.25, 0.5, 1.0, 1.0])  # errors 0.2, 0.6, 1.0, 1.2
+    rows[0].errors = np.array([2.0, 1.0])
+    assert success_curves(rows)[0][-1] == pytest.approx(2.05)
 
 
 def test_the_outcome_counts_list_the_rows_that_recorded_them(sweep):

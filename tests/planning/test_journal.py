@@ -5,18 +5,19 @@ import json
 import pytest
 
 from keyin.errors import ConfigError, DatasetFormatError
-from keyin.planning.journal import append_record, claim_run_dir, read_journal
+from keyin.io import append_json_line
+from keyin.planning.journal import claim_run_dir, read_journal
 
 
 def test_records_round_trip_and_a_partial_last_line_is_dropped_from_the_file(tmp_path):
     path = tmp_path / "tasks.jsonl"
     assert read_journal(path) == ([], False)
-    append_record(path, {"task": 0, "final_error": 0.5})
+    append_json_line(path, {"task": 0, "final_error": 0.5})
     with open(path, "a") as handle:
         handle.write('{"task": 1, "fin')  # killed mid-write
     assert read_journal(path) == ([{"task": 0, "final_error": 0.5}], True)
     assert path.read_text() == '{"final_error": 0.5, "task": 0}\n'
-    append_record(path, {"task": 1})
+    append_json_line(path, {"task": 1})
     assert read_journal(path) == ([{"task": 0, "final_error": 0.5}, {"task": 1}], False)
     path.write_text('{"task": 0}\nnot json\n')
     with pytest.raises(DatasetFormatError, match="line 2 is not a JSON object"):
