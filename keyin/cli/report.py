@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from datetime import date
 from pathlib import Path
 
@@ -125,15 +126,19 @@ def keyframe_table(sweep: Path, out: Path, n_examples: int) -> list[Path]:
     rows = summarise(records)
     header = (
         f"# Keyframe discovery F1 (paper Table 1)\n\nFrom `{sweep}` by `keyin-report {sweep}` on {date.today()}; "
-        f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips. Scales: "
+        f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips: *interior* leaves a "
+        f"padded clip's last valid frame out of labels and predictions, *with ends* gives it to every "
+        f"method, *as given* scores each method's own keyframes (docs/evaluation.md). Scales: "
         f"{', '.join(sorted({str(r.get('scale')) for r in records}))}.\n\n"
     )
     written = [out / "table1.md", out / "table1.csv"]
     atomic_write_text(written[0], header + markdown_table(rows))
     atomic_write_text(written[1], csv_table(rows))
+    # The bars are the interior column (docs/evaluation.md) unless a job predates it.
+    score = "f1_interior" if not any(math.isnan(row.mean["f1_interior"]) for row in rows) else "f1"
     written.append(save_f1_bars(
-        [row.dataset for row in rows], [row.method for row in rows], [row.mean["f1"] for row in rows],
-        [row.std["f1"] for row in rows], [row.paper_f1 for row in rows], out / "table1_f1.png",
+        [row.dataset for row in rows], [row.method for row in rows], [row.mean[score] for row in rows],
+        [row.std[score] for row in rows], [row.paper_f1 for row in rows], out / "table1_f1.png",
     ))
     for dataset in sorted({row.dataset for row in rows}):
         job, predicted, truth = example_predictions(records, dataset)

@@ -10,7 +10,7 @@ import torch
 from rich.progress import Progress
 from torch.utils.data import DataLoader, Dataset
 
-from keyin.eval.f1 import keyframe_lists, keyframe_scores
+from keyin.eval.f1 import column_scores, keyframe_lists, keyframe_scores
 from keyin.io import atomic_write_text
 from keyin.viz.keyframes import save_keyframe_pictures
 
@@ -26,16 +26,19 @@ def evaluate_discoverer(
     num_workers: int = 0,
     progress: bool = False,
 ) -> dict[str, float]:
-    """Keyframe scores of ``discoverer`` on every clip of ``clips`` (see ``keyframe_scores``)."""
+    """Keyframe scores of ``discoverer`` on every clip of ``clips``: as the method gives its keyframes
+    (:func:`keyin.eval.f1.keyframe_scores`) and in the information rule's two columns
+    (:func:`keyin.eval.f1.column_scores`, ``f1_interior``, ``f1_with_ends``, ...)."""
     loader = DataLoader(clips, batch_size=batch_size, num_workers=num_workers, shuffle=False)
-    predicted, truth = [], []
+    predicted, truth, lengths = [], [], []
     with Progress(disable=not progress) as bar:
         task = bar.add_task("discovering keyframes", total=len(clips))
         for batch in loader:
             predicted.extend(discoverer(batch["frames"], batch["future_length"]))
             truth.extend(keyframe_lists(batch["keyframes"]))
+            lengths.extend(batch["future_length"].tolist())
             bar.update(task, advance=len(batch["frames"]))
-    return keyframe_scores(predicted, truth, n_future)
+    return {**keyframe_scores(predicted, truth, n_future), **column_scores(predicted, truth, lengths, n_future)}
 
 
 @torch.no_grad()

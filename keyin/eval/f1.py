@@ -83,6 +83,51 @@ def keyframe_scores(
     }
 
 
+# The columns every method is scored in, by how a padded clip's last valid frame is treated
+# (docs/evaluation.md): removed from labels and predictions, or given to every method.
+COLUMNS = ("interior", "with_ends")
+COLUMN_SCORES = ("f1", "f1_tol1", "precision", "recall", "n_predicted", "n_true")
+
+
+def sequence_ends(lengths: Iterable[int], n_future: int) -> list[int | None]:
+    """Per clip, its last valid future frame if the sequence ends inside the window (the rest is
+    padding), else None: a clip that fills the window was cut there, and its last frame is no event."""
+    return [length - 1 if 0 < length < n_future else None for length in lengths]
+
+
+def without_ends(positions: Iterable[Iterable[int]], ends: Sequence[int | None]) -> list[list[int]]:
+    """Per clip, the positions less the clip's sequence end."""
+    return [[int(p) for p in row if int(p) != end] for row, end in zip(positions, ends, strict=True)]
+
+
+def with_ends(positions: Iterable[Iterable[int]], ends: Sequence[int | None]) -> list[list[int]]:
+    """Per clip, the positions with the clip's sequence end added (once)."""
+    return [
+        sorted({int(p) for p in row} | ({end} if end is not None else set()))
+        for row, end in zip(positions, ends, strict=True)
+    ]
+
+
+def column_scores(
+    predicted: Sequence[Sequence[int]], truth: Sequence[Sequence[int]], lengths: Sequence[int], n_future: int
+) -> dict[str, float]:
+    """The scores of the information rule's two columns, ``<score>_interior`` and
+    ``<score>_with_ends`` for each of :data:`COLUMN_SCORES`.
+
+    *Interior*: the last valid frame of a padded clip is neither a label nor a prediction, so no
+    method gains from knowing where a sequence ends. *With ends*: every method gets that frame as a
+    prediction (and it is a label), so every method knows it. Full-length clips are the same in
+    both. Args as :func:`keyframe_scores`, with ``lengths`` (B,) valid future frames per clip.
+    """
+    ends = sequence_ends(lengths, n_future)
+    interior = keyframe_scores(without_ends(predicted, ends), without_ends(truth, ends), n_future)
+    ended = keyframe_scores(with_ends(predicted, ends), with_ends(truth, ends), n_future)
+    return {
+        **{f"{score}_interior": interior[score] for score in COLUMN_SCORES},
+        **{f"{score}_with_ends": ended[score] for score in COLUMN_SCORES},
+    }
+
+
 def discovery_summary(predicted: list[list[int]], keyframes: torch.Tensor) -> dict[str, float]:
     """What a training run logs about discovered keyframes on a validation batch.
 

@@ -12,6 +12,8 @@ def write_job(root, name, method, seed, f1, version="0.2.0", **extra):
     job.mkdir(parents=True)
     scores = dict(f1=f1, f1_tol1=f1 + 0.1, precision=f1, recall=f1, n_predicted=5.0)
     written_by = {} if version is None else {"keyin_version": version}  # keyin 0.1 wrote no version
+    if version is not None:  # and no information-rule columns (docs/evaluation.md)
+        scores.update(f1_interior=f1 - 0.05, f1_with_ends=f1 + 0.05, f1_tol1_interior=f1 + 0.05)
     (job / "metrics.json").write_text(
         json.dumps(dict(scores, method=method, dataset="brownian", seed=seed, **written_by, **extra))
     )
@@ -44,11 +46,12 @@ def test_rows_average_over_seeds_in_the_papers_order_with_its_numbers(sweep):
 def test_markdown_and_csv_carry_every_row(sweep):
     rows = summarise(collect_metrics(sweep))
     markdown = markdown_table(rows)
-    assert "| brownian | keyin_plus | 0.600 ± 0.100 | 0.84 |" in markdown
-    assert "| brownian | surprise_shift0 | 0.100 ± 0.000 | – |" in markdown
+    assert "| brownian | keyin_plus | 0.550 ± 0.100 | 0.650 ± 0.100 | 0.600 ± 0.100 | 0.84 | 0.650 | 0.700 |" in markdown
+    assert "| brownian | surprise_shift0 | – | – | 0.100 ± 0.000 | – | – |" in markdown  # a variant: no columns here
     lines = csv_table(rows).splitlines()
-    assert len(lines) == 1 + len(rows) and lines[0].startswith("dataset,method,seeds,paper_f1,f1_mean,f1_std")
-    assert lines[-1].startswith("brownian,keyin_plus,0 1 2,0.84,0.6,0.1")
+    assert len(lines) == 1 + len(rows)
+    assert lines[0].startswith("dataset,method,seeds,paper_f1,f1_interior_mean,f1_interior_std,f1_with_ends_mean")
+    assert lines[-1].startswith("brownian,keyin_plus,0 1 2,0.84,0.55,0.1,0.65,0.1,0.6,0.1")
 
 
 def test_a_keyin_0_1_job_says_keyin_for_keyin_plus_and_is_reported_under_that_name(tmp_path):
@@ -58,6 +61,7 @@ def test_a_keyin_0_1_job_says_keyin_for_keyin_plus_and_is_reported_under_that_na
     rows = summarise(collect_metrics(tmp_path))
     assert [row.method for row in rows] == ["keyin_paper", "keyin_plus", "keyin_plus_offsets"]
     assert rows[1].mean["f1"] == pytest.approx(0.5) and rows[2].mean["f1"] == pytest.approx(0.2)
+    assert "| brownian | keyin_plus | – | – | 0.500 ± 0.000 | 0.84 | – |" in markdown_table(rows)
 
 
 def test_a_seed_reported_twice_and_an_empty_folder_are_refused(sweep, tmp_path_factory):
