@@ -48,21 +48,20 @@ def main() -> None:
     clips = Subset(clips, range(min(args.clips, len(clips))))
     batch = next(iter(DataLoader(clips, batch_size=len(clips))))
     started = time.perf_counter()
-    n_cond, lengths = stage1["n_cond"], batch["future_length"]
-    embeddings = module.encoder(batch["frames"])
-    keys = module.predictor(embeddings[:, :n_cond], embeddings[:, n_cond:], lengths, mode="posterior", sample=False)
+    n_cond, lengths, model = stage1["n_cond"], batch["future_length"], module.model
+    embeddings, keys = model.keyframes(batch["frames"], lengths, mode="posterior", sample=False)
     boundary_emb, future = embeddings[:, n_cond - 1 :], batch["frames"][:, n_cond:].flatten(2)
     weights = future_pixel_weights(module.pixel_weights(batch["frames"]), n_cond)
     pixel_costs = {  # per clip length: (clips of that length, their segment costs)
         length: interpolation_costs(
-            module.interpolator, module.decoder, boundary_emb[rows, : length + 1], future[rows, :length],
+            model.interpolator, model.decoder, boundary_emb[rows, : length + 1], future[rows, :length],
             None if weights is None else weights[rows, :length],
         )
         for length in lengths.unique().tolist()
         for rows in [(lengths == length).nonzero().flatten()]
     }
     seconds = time.perf_counter() - started
-    max_offset, n_keys = module.predictor.max_offset, module.hparams.n_keyframes
+    max_offset, n_keys = model.predictor.max_offset, module.hparams.n_keyframes
     rows = [f"| λ (nats) | α | F1 | ±1 F1 | precision | recall | keyframes/clip |", "|---|---|---|---|---|---|---|"]
     for cost in args.costs:
         for weight in args.weights:

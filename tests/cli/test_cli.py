@@ -24,7 +24,7 @@ def test_generate_writes_shards_a_manifest_and_a_run_dir(brownian_test_set):
     assert len(runs) == 1 and json.loads(runs[0].read_text())["clips"] == 40
 
 
-@pytest.mark.parametrize("model", ["random", "constant"])
+@pytest.mark.parametrize("model", ["random", "constant", "changepoint"])
 def test_eval_baseline_prints_metrics_and_writes_them(brownian_test_set, model):
     result = run("eval", f"model={model}", "progress=false", cwd=brownian_test_set)
     assert result.returncode == 0, result.stderr
