@@ -19,6 +19,7 @@ OLD_COMMANDS = json.loads((Path(__file__).parent / "reference" / "old_commands.j
 
 # The old presets priced keyframes at 120 nats on pushing outside scale=cpu (read only by discovery=map).
 OLD_PUSHING_PRICE = ("model.keyframes.map_keyframe_cost=120.0",)
+OLD_CONSTANT_OFFSET = {"brownian": 6, "pushing": 4}
 
 
 def new_model(scale: str, model: str) -> str:
@@ -36,6 +37,8 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
         overrides += OLD_SMOKE_KEYIN if model == "keyin" else OLD_SMOKE_TWO_STAGES if trains_two_stages else OLD_SMOKE
     if scale != "cpu" and dataset == "pushing" and trains_two_stages:
         overrides += OLD_PUSHING_PRICE
+    if model == "constant":  # keyin 0.1's fixed spacings; today's is chosen on validation clips
+        overrides.append(f"dataset.tuned.constant_offset={OLD_CONSTANT_OFFSET[dataset]}")
     return overrides
 
 

@@ -1,0 +1,62 @@
+"""Choose the Constant baseline's spacing c on validation clips.
+
+    python benchmarks/choose_constant.py --dataset pushing --clips 1000 \
+        --out benchmarks/results/choose_constant_pushing.md
+
+Constant marks every c-th future frame (keyin/decode/baselines.py); every c in 1..S that places at
+most M keyframes in a full clip (as every method may) is scored on the validation split by interior
+F1 (docs/evaluation.md), and the best is ``dataset.tuned.constant_offset``. Validation clips only: the test split stays for the reported F1.
+"""
+
+from __future__ import annotations
+
+import argparse
+from datetime import date
+from pathlib import Path
+
+from omegaconf import OmegaConf
+from torch.utils.data import DataLoader, Subset
+
+import keyin.conf
+from common import cpu_model, publish
+from keyin.data.clips import ShardClips
+from keyin.data.hdf5 import split_files
+from keyin.decode.baselines import ConstantKeyframes
+from keyin.eval.f1 import column_scores, keyframe_lists
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dataset", default="brownian")
+    parser.add_argument("--clips", type=int, default=1000)
+    parser.add_argument("--split", default="val")
+    parser.add_argument("--data-dir", default="data")
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args()
+    dataset = OmegaConf.load(Path(keyin.conf.__file__).parent / "dataset" / f"{args.dataset}.yaml")
+    image = (dataset.image_size, dataset.image_size, dataset.channels)
+    clips = ShardClips(split_files(Path(args.data_dir) / args.dataset, args.split), image, dataset.n_cond, dataset.n_future)
+    clips = Subset(clips, range(min(args.clips, len(clips))))
+    batch = next(iter(DataLoader(clips, batch_size=len(clips))))
+    truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()
+    scores = {
+        offset: column_scores(ConstantKeyframes(offset)(batch["frames"], batch["future_length"]), truth, lengths, dataset.n_future)
+        for offset in range(dataset.n_future // (dataset.n_keyframes + 1) + 1, dataset.max_offset + 1)  # ≤ M keyframes
+    }
+    best = max(scores, key=lambda offset: scores[offset]["f1_interior"])
+    rows = ["| c | F1 interior | ±1 F1 interior | F1 with ends | keyframes/clip (interior) |", "|---|---|---|---|---|"]
+    for offset, s in scores.items():
+        mark = "**" if offset == best else ""
+        rows.append(f"| {offset} | {mark}{s['f1_interior']:.3f}{mark} | {s['f1_tol1_interior']:.3f} | {s['f1_with_ends']:.3f} | "
+                    f"{s['n_predicted_interior']:.2f} |")
+    report = "\n".join([
+        f"## Constant baseline: its spacing c on {len(clips)} {args.split} clips ({args.dataset})\n",
+        f"- command: `python benchmarks/choose_constant.py --dataset {args.dataset} --clips {args.clips} --split {args.split}`",
+        f"- machine: {cpu_model()}, {date.today()}; best c = {best} (interior F1 {scores[best]['f1_interior']:.3f})\n",
+        *rows,
+    ])
+    publish(report, args.out)
+
+
+if __name__ == "__main__":
+    main()
