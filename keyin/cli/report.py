@@ -1,10 +1,10 @@
-"""keyin-report <sweep dir>: the paper's Table 1 and/or Table 2 from a sweep's metrics.json files.
+"""keyin-report <sweep dir> [<sweep dir> ...]: the paper's Table 1 and/or Table 2 from the sweeps' metrics.json files.
 
 For keyframe jobs (keyin-train, keyin-eval) writes ``table1.md``, ``table1.csv``, ``table1_f1.png``
 (bars with the paper's numbers) and, per dataset, ``examples_<dataset>.png`` (each method's
 keyframes on the first test clips); for planning jobs (keyin-plan) ``table2.md``, ``table2.csv``
 and ``table2_success.png`` (success rate against the threshold); into ``--out`` (default:
-``<sweep dir>/report``).
+``<first sweep dir>/report``).
 """
 
 from __future__ import annotations
@@ -81,8 +81,9 @@ def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
     return frames, dataset.n_cond
 
 
-def report(sweep: Path, out: Path, n_examples: int, threshold: float | None = None) -> list[Path]:
-    """Table 2 from the sweep's keyin-plan jobs and Table 1 from its keyframe jobs (whichever it has)."""
+def report(sweep: list[Path], out: Path, n_examples: int, threshold: float | None = None) -> list[Path]:
+    """Table 2 from the sweeps' keyin-plan jobs and Table 1 from their keyframe jobs (whichever they
+    have), the jobs of several sweep folders merged by method and seed."""
     jobs = read_metrics(sweep)
     out.mkdir(parents=True, exist_ok=True)
     written = []
@@ -93,13 +94,19 @@ def report(sweep: Path, out: Path, n_examples: int, threshold: float | None = No
     return written
 
 
-def planning_table(sweep: Path, out: Path, threshold: float | None) -> list[Path]:
+def described(sweep: list[Path]) -> str:
+    """The sweep folders as Markdown code spans."""
+    return ", ".join(f"`{folder}`" for folder in sweep)
+
+
+def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> list[Path]:
     """``table2.md``, ``table2.csv`` and ``table2_success.png`` (success rate against the threshold)."""
     jobs = collect_planning(sweep)
     threshold = sweep_threshold(jobs) if threshold is None else threshold
     rows = summarise_planning(jobs, threshold)
     header = (
-        f"# Planning on the pushing tasks (paper Table 2)\n\nFrom `{sweep}` by `keyin-report {sweep}` on "
+        f"# Planning on the pushing tasks (paper Table 2)\n\nFrom {described(sweep)} by `keyin-report "
+        f"{' '.join(map(str, sweep))}` on "
         f"{date.today()}; final shortest-path distance to the goal around the wall (world units), mean ± std "
         f"over tasks; success = final error ≤ {threshold:g}. The paper states no threshold (REFERENCE §5.2): "
         f"compare the curve in table2_success.png.\n\n"
@@ -120,12 +127,13 @@ def planning_table(sweep: Path, out: Path, threshold: float | None) -> list[Path
     return written
 
 
-def keyframe_table(sweep: Path, out: Path, n_examples: int) -> list[Path]:
+def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
     """``table1.md``, ``table1.csv``, ``table1_f1.png`` and the example figures."""
     records = collect_metrics(sweep)
     rows = summarise(records)
     header = (
-        f"# Keyframe discovery F1 (paper Table 1)\n\nFrom `{sweep}` by `keyin-report {sweep}` on {date.today()}; "
+        f"# Keyframe discovery F1 (paper Table 1)\n\nFrom {described(sweep)} by `keyin-report "
+        f"{' '.join(map(str, sweep))}` on {date.today()}; "
         f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips: *interior* leaves a "
         f"padded clip's last valid frame out of labels and predictions, *with ends* gives it to every "
         f"method, *as given* scores each method's own keyframes (docs/evaluation.md). Scales: "
@@ -153,16 +161,19 @@ def keyframe_table(sweep: Path, out: Path, n_examples: int) -> list[Path]:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="keyin-report", description=__doc__.split("\n\n")[0])
-    parser.add_argument("sweep", type=Path, help="a sweep dir (e.g. runs/multirun/brownian_table1)")
-    parser.add_argument("--out", type=Path, default=None, help="output dir (default: <sweep>/report)")
+    parser.add_argument("sweep", type=Path, nargs="+",
+                        help="one or more sweep dirs (e.g. runs/multirun/brownian_table1); their jobs are merged by "
+                             "method and seed, and a method with the same seed in two of them is refused")
+    parser.add_argument("--out", type=Path, default=None, help="output dir (default: <first sweep>/report)")
     parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures")
     parser.add_argument("--threshold", type=float, default=None,
                         help="Table 2's success threshold in world units (default: the one the jobs used)")
     args = parser.parse_args(argv)
-    if not args.sweep.is_dir():
-        fail(f"{args.sweep} is not a directory; pass the sweep dir of keyin-train -m or keyin-plan -m")
+    for folder in args.sweep:
+        if not folder.is_dir():
+            fail(f"{folder} is not a directory; pass the sweep dir of keyin-train -m or keyin-plan -m")
     try:
-        for path in report(args.sweep, args.out or args.sweep / "report", args.examples, args.threshold):
+        for path in report(args.sweep, args.out or args.sweep[0] / "report", args.examples, args.threshold):
             print(f"wrote {path}")
     except (KeyinError, ValueError) as err:
         fail(str(err))

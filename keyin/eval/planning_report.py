@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from keyin.eval.planning import OUTCOMES, planning_summary, success_curve
-from keyin.eval.report import group_by_seed, is_planning, read_metrics
+from keyin.eval.report import Roots, group_by_seed, is_planning, read_metrics
 from keyin.io import read_json_lines
 
 # Paper Table 2 (REFERENCE §5.3): position error mean, std and success rate in % (None: "-").
@@ -58,8 +58,8 @@ class PlanningRow:
     outcomes: dict[str, int]
 
 
-def collect_planning(root: Path) -> list[dict[str, Any]]:
-    """Every planning job under ``root``: its metrics plus ``tasks``, the records of the ``n_tasks``
+def collect_planning(root: Roots) -> list[dict[str, Any]]:
+    """Every planning job under ``root`` (one sweep folder or several): its metrics plus ``tasks``, the records of the ``n_tasks``
     tasks it reported (the first ones of the split), and ``path``.
 
     Raises:

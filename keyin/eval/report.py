@@ -15,7 +15,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Hashable, Iterable
+from typing import Any, Callable, Hashable, Iterable, Sequence
 
 import numpy as np
 
@@ -45,16 +45,22 @@ class TableRow:
     paper_f1: float | None
 
 
-def read_metrics(root: Path) -> list[tuple[Path, dict[str, Any]]]:
-    """Every job's ``metrics.json`` under ``root``: (the job's folder, its content).
+Roots = Path | Sequence[Path]
+
+
+def read_metrics(roots: Roots) -> list[tuple[Path, dict[str, Any]]]:
+    """Every job's ``metrics.json`` under one sweep folder or several (each file once, however the
+    folders nest): (the job's folder, its content).
 
     Raises:
         ValueError: if there is none.
     """
-    jobs = [(path.parent, json.loads(path.read_text())) for path in sorted(Path(root).rglob("metrics.json"))]
-    if not jobs:
-        raise ValueError(f"no metrics.json under {root}; run the sweep first (keyin-train -m ... or keyin-plan -m ...)")
-    return jobs
+    roots = [Path(roots)] if isinstance(roots, (str, Path)) else [Path(root) for root in roots]
+    paths = sorted({path.resolve() for root in roots for path in root.rglob("metrics.json")})
+    if not paths:
+        named = ", ".join(str(root) for root in roots)
+        raise ValueError(f"no metrics.json under {named}; run the sweep first (keyin-train -m ... or keyin-plan -m ...)")
+    return [(path.parent, json.loads(path.read_text())) for path in paths]
 
 
 def is_planning(metrics: dict[str, Any]) -> bool:
@@ -67,9 +73,9 @@ def is_subgoal_predictor(metrics: dict[str, Any]) -> bool:
     return "f1" not in metrics and "argmin_last" in metrics
 
 
-def collect_metrics(root: Path) -> list[dict[str, Any]]:
-    """Every keyframe job's metrics under ``root``, one record per method and variant (planning and
-    subgoal-predictor jobs are left out).
+def collect_metrics(root: Roots) -> list[dict[str, Any]]:
+    """Every keyframe job's metrics under ``root`` (one sweep folder or several, merged by method and
+    seed), one record per method and variant (planning and subgoal-predictor jobs are left out).
 
     Raises:
         ValueError: if no metrics.json is found, or one lacks method/dataset/f1.

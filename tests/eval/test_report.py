@@ -4,6 +4,7 @@ import json
 
 import pytest
 
+from keyin.cli import report
 from keyin.eval.report import collect_metrics, csv_table, markdown_table, summarise
 
 
@@ -76,3 +77,28 @@ def test_a_foreign_metrics_file_is_named(tmp_path):
     (tmp_path / "metrics.json").write_text(json.dumps({"accuracy": 1.0}))
     with pytest.raises(ValueError, match="lacks method, dataset, f1"):
         collect_metrics(tmp_path)
+
+
+def test_several_sweep_folders_are_merged_by_method_and_seed(tmp_path):
+    """Seed 0 in one sweep, seeds 1-2 in another (a table rebuilt after a lost run folder)."""
+    write_job(tmp_path / "first", "keyin_plus_seed0", "keyin_plus", 0, 0.5)
+    write_job(tmp_path / "first", "random_seed0", "random", 0, 0.2)
+    for seed, f1 in [(1, 0.6), (2, 0.7)]:
+        write_job(tmp_path / "second", f"keyin_plus_seed{seed}", "keyin_plus", seed, f1)
+    rows = summarise(collect_metrics([tmp_path / "first", tmp_path / "second"]))
+    assert [(row.method, row.seeds) for row in rows] == [("random", [0]), ("keyin_plus", [0, 1, 2])]
+    assert rows[1].mean["f1"] == pytest.approx(0.6)
+    nested = summarise(collect_metrics([tmp_path, tmp_path / "second"]))  # a folder inside another: read once
+    assert [row.seeds for row in nested] == [[0], [0, 1, 2]]
+    write_job(tmp_path / "third", "keyin_plus_seed2", "keyin_plus", 2, 0.9)
+    with pytest.raises(ValueError, match="appears twice"):
+        summarise(collect_metrics([tmp_path / "second", tmp_path / "third"]))
+
+
+def test_keyin_report_takes_several_sweep_folders(tmp_path):
+    write_job(tmp_path / "first", "keyin_plus_seed0", "keyin_plus", 0, 0.5)
+    write_job(tmp_path / "second", "keyin_plus_seed1", "keyin_plus", 1, 0.7)
+    report.main([str(tmp_path / "first"), str(tmp_path / "second"), "--out", str(tmp_path / "merged")])
+    table = (tmp_path / "merged" / "table1.md").read_text()
+    assert f"From `{tmp_path / 'first'}`, `{tmp_path / 'second'}`" in table
+    assert "| brownian | keyin_plus | 0.550 ± 0.141 | 0.650 ± 0.141 | 0.600 ± 0.141 | 0.84 |" in table
