@@ -23,7 +23,8 @@ demo: $(STAMP)
 	$(BIN)/keyin-eval model=random dataset=brownian
 	$(BIN)/keyin-eval model=constant dataset=brownian
 
-# KEYIN on Brownian at scale=cpu, both stages, then its keyframe F1 on the 1000 test clips
+# KEYIN with our additions (model=keyin_plus) on Brownian at scale=cpu, both stages, then its keyframe
+# F1 on the 1000 test clips; the paper's KEYIN: keyin-train experiment=brownian_keyin model=keyin backbone=paper
 # (about 40 minutes on 2 CPU cores; the last line printed is the metrics JSON).
 demo-keyin: $(STAMP)
 	$(BIN)/keyin-train experiment=brownian_keyin

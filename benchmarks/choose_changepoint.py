@@ -19,13 +19,8 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from omegaconf import OmegaConf
-from torch.utils.data import DataLoader, Subset
 
-import keyin.conf
-from common import cpu_model, publish
-from keyin.data.clips import ShardClips
-from keyin.data.hdf5 import split_files
+from common import cpu_model, publish, split_batch
 from keyin.decode.changepoint import COSTS, SIGNALS, ChangepointKeyframes
 from keyin.eval.f1 import column_scores, keyframe_lists
 
@@ -42,11 +37,7 @@ def main() -> None:
     parser.add_argument("--costs", nargs="+", default=list(COSTS), choices=COSTS)
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
-    dataset = OmegaConf.load(Path(keyin.conf.__file__).parent / "dataset" / f"{args.dataset}.yaml")
-    image = (dataset.image_size, dataset.image_size, dataset.channels)
-    clips = ShardClips(split_files(Path(args.data_dir) / args.dataset, args.split), image, dataset.n_cond, dataset.n_future)
-    clips = Subset(clips, range(min(args.clips, len(clips))))
-    batch = next(iter(DataLoader(clips, batch_size=len(clips))))
+    dataset, batch = split_batch(args.dataset, args.split, args.clips, args.data_dir)
     truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()
     started = time.perf_counter()
     results = []
@@ -66,7 +57,7 @@ def main() -> None:
         rows.append(f"| {signal} | {cost} | {penalty:g} | {mark}{s['f1_interior']:.3f}{mark} | {s['f1_tol1_interior']:.3f} | "
                     f"{s['f1_with_ends']:.3f} | {s['n_predicted_interior']:.2f} |")
     report = "\n".join([
-        f"## Change-point baseline: signal, cost and penalty on {len(clips)} {args.split} clips ({args.dataset})\n",
+        f"## Change-point baseline: signal, cost and penalty on {len(batch['frames'])} {args.split} clips ({args.dataset})\n",
         f"- command: `python benchmarks/choose_changepoint.py --dataset {args.dataset} --clips {args.clips} --split {args.split} "
         f"--signals {' '.join(args.signals)} --costs {' '.join(args.costs)}`",
         f"- machine: {cpu_model()}, torch {torch.__version__}, {date.today()}; {len(results)} settings in {seconds:.0f} s",

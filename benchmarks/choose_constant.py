@@ -14,13 +14,7 @@ import argparse
 from datetime import date
 from pathlib import Path
 
-from omegaconf import OmegaConf
-from torch.utils.data import DataLoader, Subset
-
-import keyin.conf
-from common import cpu_model, publish
-from keyin.data.clips import ShardClips
-from keyin.data.hdf5 import split_files
+from common import cpu_model, publish, split_batch
 from keyin.decode.baselines import ConstantKeyframes
 from keyin.eval.f1 import column_scores, keyframe_lists
 
@@ -33,11 +27,7 @@ def main() -> None:
     parser.add_argument("--data-dir", default="data")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
-    dataset = OmegaConf.load(Path(keyin.conf.__file__).parent / "dataset" / f"{args.dataset}.yaml")
-    image = (dataset.image_size, dataset.image_size, dataset.channels)
-    clips = ShardClips(split_files(Path(args.data_dir) / args.dataset, args.split), image, dataset.n_cond, dataset.n_future)
-    clips = Subset(clips, range(min(args.clips, len(clips))))
-    batch = next(iter(DataLoader(clips, batch_size=len(clips))))
+    dataset, batch = split_batch(args.dataset, args.split, args.clips, args.data_dir)
     truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()
     scores = {
         offset: column_scores(ConstantKeyframes(offset)(batch["frames"], batch["future_length"]), truth, lengths, dataset.n_future)
@@ -50,7 +40,7 @@ def main() -> None:
         rows.append(f"| {offset} | {mark}{s['f1_interior']:.3f}{mark} | {s['f1_tol1_interior']:.3f} | {s['f1_with_ends']:.3f} | "
                     f"{s['n_predicted_interior']:.2f} |")
     report = "\n".join([
-        f"## Constant baseline: its spacing c on {len(clips)} {args.split} clips ({args.dataset})\n",
+        f"## Constant baseline: its spacing c on {len(batch['frames'])} {args.split} clips ({args.dataset})\n",
         f"- command: `python benchmarks/choose_constant.py --dataset {args.dataset} --clips {args.clips} --split {args.split}`",
         f"- machine: {cpu_model()}, {date.today()}; best c = {best} (interior F1 {scores[best]['f1_interior']:.3f})\n",
         *rows,

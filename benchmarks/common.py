@@ -1,10 +1,18 @@
-"""What the benchmark scripts share: the machine's name and writing the Markdown result."""
+"""What the benchmark scripts share: the machine's name, writing the Markdown result, a split's clips."""
 
 from __future__ import annotations
 
 import platform
 import subprocess
 from pathlib import Path
+from typing import Any
+
+from omegaconf import OmegaConf
+from torch.utils.data import DataLoader, Subset
+
+import keyin.conf
+from keyin.data.clips import ShardClips
+from keyin.data.hdf5 import split_files
 
 
 def cpu_model() -> str:
@@ -23,3 +31,13 @@ def publish(report: str, out: Path | None) -> None:
     if out:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(report)
+
+
+def split_batch(dataset_name: str, split: str, clips: int, data_dir: str) -> tuple[Any, dict[str, Any]]:
+    """The dataset's config (keyin/conf/dataset/<name>.yaml) and the first ``clips`` clips of one of
+    its generated splits (``<data_dir>/<name>/``) as one batch."""
+    dataset = OmegaConf.load(Path(keyin.conf.__file__).parent / "dataset" / f"{dataset_name}.yaml")
+    image = (dataset.image_size, dataset.image_size, dataset.channels)
+    shards = ShardClips(split_files(Path(data_dir) / dataset_name, split), image, dataset.n_cond, dataset.n_future)
+    shards = Subset(shards, range(min(clips, len(shards))))
+    return dataset, next(iter(DataLoader(shards, batch_size=len(shards))))
