@@ -7,8 +7,10 @@ import difflib
 import errno
 import functools
 import json
+import logging
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
@@ -31,6 +33,23 @@ CONFIG_MODULE = "keyin.conf"
 OmegaConf.register_new_resolver(
     "keyin.default", lambda value, fallback: fallback if value is None else value, replace=True
 )
+
+
+class LightningTips(logging.Filter):
+    """Drops Lightning's advertisements ("💡 Tip: ... try installing litlogger"), nothing else."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.getMessage()).startswith("💡 Tip")
+
+
+def quiet_expected_library_output() -> None:
+    """Keep a run's output to what a user acts on: Lightning's install tips and a deprecation inside
+    Lightning's own pytree helper (printed at every fit, nothing a keyin user can change) are
+    dropped. Warnings about the user's data or config are never filtered."""
+    warnings.filterwarnings("ignore", message=r"`isinstance\(treespec, LeafSpec\)` is deprecated")
+    lightning = logging.getLogger("lightning.pytorch.utilities.rank_zero")
+    if not any(isinstance(existing, LightningTips) for existing in lightning.filters):
+        lightning.addFilter(LightningTips())
 
 
 def fail(message: str) -> None:
@@ -137,6 +156,7 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
 
         @functools.wraps(task)
         def main() -> None:
+            quiet_expected_library_output()
             with hydra_raises():
                 try:
                     hydra_main()

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 import math
+import warnings
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -14,6 +16,8 @@ from keyin.io import remove_stale_temporaries
 from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
 
+
+log = logging.getLogger(__name__)
 
 LEARNING_RATES = {
     "interpolator": "scale.lr_stage1", "keyframes": "scale.lr_stage2", "surprise": "scale.lr_surprise", "tap": "scale.lr_tap",
@@ -78,7 +82,11 @@ def fit_stage(
     resume = last if last.is_file() else None
     if resume is not None:  # one clear error for a foreign, corrupt, unsafe or other model's file
         check_same_model(load_checkpoint(resume, module.stage), resume, module, config)
-    # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
-    trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
+    with warnings.catch_warnings():
+        if module.stage == "keyframes":  # the frozen stage 1 is in eval mode by design: said once, in our words
+            warnings.filterwarnings("ignore", message=r"Found \d+ module\(s\) in eval mode")
+            log.info("stage 2: stage 1's encoder, decoder and interpolator stay frozen in eval mode (by design)")
+        # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
+        trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
     trainer.save_checkpoint(last, weights_only=False)  # the full final state (optimizer too), whatever the cadence
     return last
