@@ -137,7 +137,7 @@ def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
         f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips: *interior* leaves a "
         f"padded clip's last valid frame out of labels and predictions, *with ends* gives it to every "
         f"method, *as given* scores each method's own keyframes (docs/evaluation.md). Scales: "
-        f"{', '.join(sorted({str(r.get('scale')) for r in records}))}.\n\n"
+        f"{', '.join(sorted({str(r['scale']) for r in records if r.get('scale')})) or '– (evaluation jobs only)'}.\n\n"
     )
     written = [out / "table1.md", out / "table1.csv"]
     atomic_write_text(written[0], header + markdown_table(rows))
