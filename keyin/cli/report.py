@@ -24,6 +24,7 @@ from keyin.data.datamodule import split_clips
 from keyin.errors import KeyinError
 from keyin.eval.planning_report import (
     collect_planning,
+    difference_markdown,
     outcome_markdown,
     planning_csv,
     planning_markdown,
@@ -118,7 +119,8 @@ def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> lis
             "puck, `reached then lost` came within the threshold and left, `not crossed` ended on the start's side "
             "of the wall's centre line, `crossed missed` crossed it and stopped away from the goal.\n\n" + outcomes
         )
-    text = header + planning_markdown(rows, threshold) + outcomes
+    differences = difference_markdown(rows, threshold)
+    text = header + planning_markdown(rows, threshold) + ("\n" + differences if differences else "") + outcomes
     written = [out / "table2.md", out / "table2.csv"]
     atomic_write_text(written[0], text)
     atomic_write_text(written[1], planning_csv(rows, threshold))

@@ -27,15 +27,35 @@ def success_curve(errors: np.ndarray, thresholds: np.ndarray) -> np.ndarray:
     return (errors[None, :] <= np.asarray(thresholds, dtype=np.float64)[:, None]).mean(axis=1)
 
 
+def bootstrap_interval(
+    values: np.ndarray, level: float = 0.95, resamples: int = 10_000, seed: int = 0
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of the mean of (n,) values (tasks resampled with replacement).
+
+    For paired values, e.g. one planner's success minus another's on the same tasks, pass the
+    per-task differences: resampling tasks keeps the pairs together.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    indices = np.random.default_rng(seed).integers(0, len(values), size=(resamples, len(values)))
+    means = values[indices].mean(axis=1)
+    tail = (1.0 - level) / 2.0
+    return float(np.quantile(means, tail)), float(np.quantile(means, 1.0 - tail))
+
+
 def planning_summary(errors: np.ndarray, initial: np.ndarray, threshold: float) -> dict[str, float | int]:
     """Mean and std over tasks (population, as "± std over episodes") of the final errors (n,), the
-    success rate, and the mean relative error ``final / initial`` (n,)."""
+    success rate with its 95 % bootstrap interval over tasks, and the mean relative error
+    ``final / initial`` (n,)."""
     errors, initial = np.asarray(errors, dtype=np.float64), np.asarray(initial, dtype=np.float64)
+    succeeded = successes(errors, threshold)
+    low, high = bootstrap_interval(succeeded)
     return {
         "n_tasks": int(len(errors)),
         "position_error_mean": float(errors.mean()),
         "position_error_std": float(errors.std()),
-        "success_rate": float(successes(errors, threshold).mean()),
+        "success_rate": float(succeeded.mean()),
+        "success_rate_low": low,
+        "success_rate_high": high,
         "relative_error_mean": float((errors / initial).mean()),
         "initial_distance_mean": float(initial.mean()),
     }

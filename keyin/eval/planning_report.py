@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from keyin.eval.planning import OUTCOMES, planning_summary, success_curve
+from keyin.eval.planning import OUTCOMES, bootstrap_interval, planning_summary, success_curve
 from keyin.eval.report import Roots, group_by_seed, is_planning, read_metrics
 from keyin.io import read_json_lines
 
@@ -41,6 +41,7 @@ class PlanningRow:
     """One planner over all its tasks.
 
     Attributes:
+        tasks: (seed, task index) of each of its n tasks, in the order of ``errors``.
         errors, initial: (n,) final and initial shortest-path distances of its tasks.
         summary: :func:`keyin.eval.planning.planning_summary` of them.
         paper: the paper's (error mean, error std, success %) or None.
@@ -50,6 +51,7 @@ class PlanningRow:
 
     planner: str
     seeds: list[int]
+    tasks: list[tuple[int, int]]
     errors: np.ndarray
     initial: np.ndarray
     steps_mean: float
@@ -107,12 +109,14 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
     rows = []
     for planner in sorted(groups, key=planner_sort_key):
         tasks = [task for job in groups[planner].values() for task in job["tasks"]]
+        keys = [(seed, task["task"]) for seed, job in groups[planner].items() for task in job["tasks"]]
         errors = np.array([task["final_error"] for task in tasks], dtype=np.float64)
         initial = np.array([task["initial_distance"] for task in tasks], dtype=np.float64)
         rows.append(
             PlanningRow(
                 planner=planner,
                 seeds=sorted(groups[planner]),
+                tasks=keys,
                 errors=errors,
                 initial=initial,
                 steps_mean=float(np.mean([task["steps"] for task in tasks])),
@@ -137,10 +141,40 @@ def success_curves(rows: list[PlanningRow], points: int = 321) -> tuple[np.ndarr
     return thresholds, curves
 
 
+def paired_success_difference(first: PlanningRow, second: PlanningRow, threshold: float) -> dict[str, float | int]:
+    """``first``'s success rate minus ``second``'s on the tasks (seed, task) both played, with its
+    95 % paired bootstrap interval over those tasks."""
+    second_errors = dict(zip(second.tasks, second.errors))
+    common = [(key, error) for key, error in zip(first.tasks, first.errors) if key in second_errors]
+    if not common:
+        raise ValueError(f"{first.planner} and {second.planner} share no task")
+    differences = np.array(
+        [float(error <= threshold) - float(second_errors[key] <= threshold) for key, error in common]
+    )
+    low, high = bootstrap_interval(differences)
+    return {"difference": float(differences.mean()), "low": low, "high": high, "n_tasks": len(common)}
+
+
+def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[tuple[str, str], ...] = (("keyin", "jumpy"),)) -> str:
+    """One line per pair of planners (KEYIN − Jumpy) that are both in ``rows``: the success
+    difference in points with its paired interval; empty if none is."""
+    by_name = {row.planner: row for row in rows}
+    lines = []
+    for first, second in pairs:
+        if first in by_name and second in by_name:
+            d = paired_success_difference(by_name[first], by_name[second], threshold)
+            lines.append(
+                f"- {first} − {second} success: {100 * d['difference']:+.1f} points, 95 % paired bootstrap interval "
+                f"[{100 * d['low']:+.1f}, {100 * d['high']:+.1f}] over {d['n_tasks']} common tasks"
+            )
+    return "\n".join(lines) + ("\n" if lines else "")
+
+
 def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
-    """Table 2 as Markdown: position error mean ± std and success rate, ours beside the paper's."""
+    """Table 2 as Markdown: position error mean ± std and success rate (with its 95 % bootstrap
+    interval over tasks), ours beside the paper's."""
     lines = [
-        f"| planner | position error (ours) | position error (paper) | success ≤ {threshold:g} (ours) | "
+        f"| planner | position error (ours) | position error (paper) | success ≤ {threshold:g} (ours) [95 % interval] | "
         f"success (paper) | final / initial | steps | tasks | seeds |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -150,7 +184,8 @@ def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
         paper_success = "–" if row.paper is None or row.paper[2] is None else f"{row.paper[2]:.1f} %"
         lines.append(
             f"| {row.planner} | {s['position_error_mean']:.2f} ± {s['position_error_std']:.2f} | {paper_error} | "
-            f"{100 * s['success_rate']:.1f} % | {paper_success} | {s['relative_error_mean']:.2f} | "
+            f"{100 * s['success_rate']:.1f} % [{100 * s['success_rate_low']:.1f}, {100 * s['success_rate_high']:.1f}] | "
+            f"{paper_success} | {s['relative_error_mean']:.2f} | "
             f"{row.steps_mean:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
         )
     return "\n".join(lines) + "\n"
@@ -173,7 +208,8 @@ def planning_csv(rows: list[PlanningRow], threshold: float) -> str:
     """The same table as CSV (success rate as a fraction; the paper's in %)."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    stats = ("position_error_mean", "position_error_std", "success_rate", "relative_error_mean",
+    stats = ("position_error_mean", "position_error_std", "success_rate", "success_rate_low", "success_rate_high",
+             "relative_error_mean",
              "initial_distance_mean")
     writer.writerow(["planner", "seeds", "n_tasks", "success_threshold", *stats, "steps_mean",
                      "paper_error_mean", "paper_error_std", "paper_success_percent"])

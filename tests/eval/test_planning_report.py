@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 
 from keyin.cli import report
-from keyin.eval.planning import planning_summary, success_curve
+from keyin.eval.planning import bootstrap_interval, planning_summary, success_curve
 from keyin.eval.planning_report import (
     collect_planning,
+    difference_markdown,
     outcome_markdown,
+    paired_success_difference,
     planning_csv,
     planning_markdown,
     success_curves,
@@ -55,9 +57,9 @@ def test_rows_pool_the_tasks_of_every_seed_in_the_papers_order(sweep):
     assert no_subgoals.summary["position_error_mean"] == pytest.approx(0.75)
     assert no_subgoals.summary["success_rate"] == 0.5 and no_subgoals.paper == (0.90, 0.14, 15.0)
     markdown = planning_markdown(rows, 0.66)
-    assert "| initial | 1.25 ± 0.00 | 1.32 ± 0.06 | 0.0 % | – |" in markdown
-    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 50.0 % | 15.0 % | 0.60 | 10.0 | 4 | 0 1 |" in markdown
-    assert "| demo_subgoals | 0.10 ± 0.00 | – | 100.0 % | – |" in markdown
+    assert "| initial | 1.25 ± 0.00 | 1.32 ± 0.06 | 0.0 % [0.0, 0.0] | – |" in markdown
+    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 50.0 % [0.0, 100.0] | 15.0 % | 0.60 | 10.0 | 4 | 0 1 |" in markdown
+    assert "| demo_subgoals | 0.10 ± 0.00 | – | 100.0 % [100.0, 100.0] | – |" in markdown
     lines = planning_csv(rows, 0.66).splitlines()
     assert len(lines) == 4 and lines[0].startswith("planner,seeds,n_tasks,success_threshold,position_error_mean")
     assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.9,0.14,15.0")
@@ -90,7 +92,7 @@ def test_the_report_writes_table_2_and_the_curve(sweep, capsys):
     assert (sweep / "report" / "table2.csv").is_file() and (sweep / "report" / "table2_success.png").stat().st_size > 0
     assert not (sweep / "report" / "table1.md").exists()
     report.main([str(sweep), "--threshold", "1.1", "--out", str(sweep / "loose")])
-    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 75.0 % |" in (sweep / "loose" / "table2.md").read_text()
+    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 75.0 % [" in (sweep / "loose" / "table2.md").read_text()
 
 
 def test_mixed_thresholds_and_a_planner_seed_twice_are_refused(sweep, capsys):
@@ -101,3 +103,27 @@ def test_mixed_thresholds_and_a_planner_seed_twice_are_refused(sweep, capsys):
     write_job(sweep / "again", "initial", 0, [1.0])
     with pytest.raises(ValueError, match="planner initial with seed 0 appears twice"):
         summarise_planning(collect_planning(sweep), 0.66)
+
+
+def test_the_success_interval_is_the_binomial_one_for_many_tasks():
+    """240 tasks, 213 successes (88.8 %): the normal approximation gives ±1.96·√(p(1−p)/n) = ±4.0 points."""
+    successes = np.r_[np.ones(213), np.zeros(27)]
+    low, high = bootstrap_interval(successes)
+    half = 1.96 * np.sqrt(0.8875 * 0.1125 / 240)
+    assert low == pytest.approx(0.8875 - half, abs=0.006) and high == pytest.approx(0.8875 + half, abs=0.006)
+    assert bootstrap_interval(np.full(10, 0.3)) == pytest.approx((0.3, 0.3))
+    assert bootstrap_interval(successes, seed=3) == bootstrap_interval(successes, seed=3)  # seeded
+
+
+def test_the_paired_difference_counts_only_the_tasks_both_played(tmp_path):
+    write_job(tmp_path, "keyin", 0, [0.1, 0.1, 0.1, 1.0, 0.1])  # succeeds on tasks 0, 1, 2, 4
+    write_job(tmp_path, "jumpy", 0, [0.1, 1.0, 0.1, 1.0])  # tasks 0 and 2; task 4 never played
+    rows = {row.planner: row for row in summarise_planning(collect_planning(tmp_path), 0.66)}
+    difference = paired_success_difference(rows["keyin"], rows["jumpy"], 0.66)
+    assert difference["n_tasks"] == 4 and difference["difference"] == pytest.approx(0.25)
+    assert difference["low"] <= 0.25 <= difference["high"]
+    same = paired_success_difference(rows["jumpy"], rows["jumpy"], 0.66)
+    assert (same["difference"], same["low"], same["high"]) == (0.0, 0.0, 0.0)
+    line = difference_markdown(list(rows.values()), 0.66)
+    assert line.startswith("- keyin − jumpy success: +25.0 points, 95 % paired bootstrap interval [")
+    assert difference_markdown([rows["keyin"]], 0.66) == ""
