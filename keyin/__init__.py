@@ -1,3 +1,8 @@
 """keyin: keyframe discovery and planning with keyframe-based stochastic video prediction."""
 
 __version__ = "0.2.0"
+
+# Models renamed since keyin 0.1, old name -> today's: 0.1's `keyin` (at scale=cpu, with our
+# additions) is `keyin_plus`; `keyin` is now the paper's method. Read where a checkpoint or a
+# metrics.json carries no keyin_version.
+RENAMED_SINCE_0_1 = {"keyin": "keyin_plus"}

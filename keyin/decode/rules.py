@@ -12,6 +12,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
+from keyin.decode.ends import sequence_ends, with_ends
 from keyin.decode.offsets import offset_keyframes
 from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
 from keyin.decode.segmentation import decode_by_length
@@ -46,12 +47,9 @@ def with_sequence_ends(positions: list[list[int]], lengths: Tensor, n_future: in
     Args:
         positions: per clip, interior keyframe positions; lengths: (B,) valid future frames.
     Returns:
-        Per clip, the positions with ``length - 1`` appended for clips with ``0 < length < n_future``.
+        Per clip, the positions with ``length - 1`` added for clips with ``0 < length < n_future``.
     """
-    return [
-        row + [length - 1] if 0 < length < n_future else row
-        for row, length in zip(positions, lengths.tolist())
-    ]
+    return with_ends(positions, sequence_ends(lengths.tolist(), n_future))
 
 
 @torch.no_grad()

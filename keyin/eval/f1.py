@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
 
+from keyin.decode.ends import sequence_ends, with_ends
+
 if TYPE_CHECKING:
     import torch
 
@@ -83,29 +85,14 @@ def keyframe_scores(
     }
 
 
-# The columns every method is scored in, by how a padded clip's last valid frame is treated
-# (docs/evaluation.md): removed from labels and predictions, or given to every method.
-COLUMNS = ("interior", "with_ends")
+# The scores of each information-rule column (docs/evaluation.md): a padded clip's last valid frame
+# removed from labels and predictions (interior), or given to every method (with ends).
 COLUMN_SCORES = ("f1", "f1_tol1", "precision", "recall", "n_predicted", "n_true")
 
 
-def sequence_ends(lengths: Iterable[int], n_future: int) -> list[int | None]:
-    """Per clip, its last valid future frame if the sequence ends inside the window (the rest is
-    padding), else None: a clip that fills the window was cut there, and its last frame is no event."""
-    return [length - 1 if 0 < length < n_future else None for length in lengths]
-
-
 def without_ends(positions: Iterable[Iterable[int]], ends: Sequence[int | None]) -> list[list[int]]:
-    """Per clip, the positions less the clip's sequence end."""
+    """Per clip, the positions less the clip's sequence end (:func:`keyin.decode.ends.sequence_ends`)."""
     return [[int(p) for p in row if int(p) != end] for row, end in zip(positions, ends, strict=True)]
-
-
-def with_ends(positions: Iterable[Iterable[int]], ends: Sequence[int | None]) -> list[list[int]]:
-    """Per clip, the positions with the clip's sequence end added (once)."""
-    return [
-        sorted({int(p) for p in row} | ({end} if end is not None else set()))
-        for row, end in zip(positions, ends, strict=True)
-    ]
 
 
 def column_scores(

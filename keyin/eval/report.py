@@ -19,6 +19,8 @@ from typing import Any, Callable, Hashable, Iterable, Sequence
 
 import numpy as np
 
+from keyin import RENAMED_SINCE_0_1
+
 # Paper Table 1 (keyframe F1; REFERENCE §5.3). Jumpy is not in it (its keyframes are Constant's).
 # KEYIN's figure stands beside the paper's method (keyin_paper) and beside ours (keyin_plus).
 PAPER_TABLE1 = {
@@ -26,8 +28,6 @@ PAPER_TABLE1 = {
     "pushing": {"random": 0.18, "constant": 0.23, "static": 0.18, "surprise": 0.10, "keyin_paper": 0.30, "keyin_plus": 0.30},
 }
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
-# metrics.json files of keyin 0.1 (no keyin_version) call KEYIN with our additions "keyin".
-LEGACY_METHODS = {"keyin": "keyin_plus"}
 SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "precision", "recall", "n_predicted",
 )  # the information rule's columns (docs/evaluation.md) first; a keyin 0.1 job has only the rest
@@ -99,7 +99,7 @@ def collect_metrics(root: Roots) -> list[dict[str, Any]]:
 def current_name(method: str) -> str:
     """A keyin 0.1 method or variant name (``keyin``, ``keyin_offsets``) in this version's names."""
     base, _, variant = method.partition("_")
-    new = LEGACY_METHODS.get(base)
+    new = RENAMED_SINCE_0_1.get(base)
     return method if new is None else f"{new}_{variant}" if variant else new
 
 

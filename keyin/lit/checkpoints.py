@@ -10,16 +10,13 @@ import lightning as L
 import torch
 from lightning.pytorch.plugins.io import TorchCheckpointIO
 
-from keyin import __version__
+from keyin import RENAMED_SINCE_0_1, __version__
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
 VERSION_KEY = "keyin_version"
-# keyin 0.1 called KEYIN with our additions model=keyin; since 0.2 that is keyin_plus, and model=keyin
-# is the paper's method (named keyin_paper).
-LEGACY_MODEL_NAMES = {"keyin": "keyin_plus"}
 # keyin 0.1 kept stage 2's networks at the top of its LightningModule; since 0.2 they are its KEYIN model's.
 KEYIN_NETWORKS = ("encoder.", "decoder.", "interpolator.", "predictor.")
 PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
@@ -47,7 +44,7 @@ def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
     """The ``model.name`` a checkpoint was trained as, in this version's names (a checkpoint of keyin
     0.1, which has no version entry, says ``keyin`` for today's ``keyin_plus``)."""
     name = (checkpoint.get(CONFIG_KEY) or {}).get("model", {}).get("name")
-    return name if VERSION_KEY in checkpoint else LEGACY_MODEL_NAMES.get(name, name)
+    return name if VERSION_KEY in checkpoint else RENAMED_SINCE_0_1.get(name, name)
 
 
 STAGE_CHECKPOINTS = {

@@ -5,7 +5,8 @@ import pytest
 import torch
 
 from keyin.eval.discovery import evaluate_discoverer
-from keyin.eval.f1 import column_scores, keyframe_scores, sequence_ends, with_ends, without_ends
+from keyin.decode.ends import sequence_ends, with_ends
+from keyin.eval.f1 import column_scores, keyframe_scores, without_ends
 
 N = 10
 # Clip 0 ends inside the window after 6 valid frames (its last valid frame, 5, is a label);
