@@ -42,9 +42,22 @@ def validate(devices: int, clips: Dataset | None = None) -> dict[str, float]:
     return metrics
 
 
+def validate_on_two_processes(attempts: int = 3) -> dict[str, float]:
+    """`validate(2)`, retried when a worker aborts (SIGABRT) while gloo tears down its threads after the
+    validation: a rare race at process exit (seen once in CI, never in 12 runs under full load here) that
+    loses the results but says nothing about the metric reduction under test."""
+    for _ in range(attempts - 1):
+        try:
+            return validate(2)
+        except torch.multiprocessing.ProcessExitedException as crash:
+            if crash.signal_name != "SIGABRT":
+                raise
+    return validate(2)
+
+
 @pytest.mark.skipif(not torch.distributed.is_available(), reason="torch built without torch.distributed")
 def test_two_cpu_processes_validate_to_the_loss_of_one():
-    single, distributed = validate(1), validate(2)
+    single, distributed = validate(1), validate_on_two_processes()
     rank0_clips = validate(1, torch.utils.data.Subset(RandomClips(), [0, 2, 4, 6]))  # what rank 0 sees
     assert rank0_clips["val/loss"] != pytest.approx(single["val/loss"], rel=1e-3)  # so the ranks were averaged
     for key in ("val/loss", "val/bce_per_frame", "val/kl_per_step"):
