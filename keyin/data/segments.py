@@ -77,3 +77,8 @@ def crosses_keyframe(
     counts = torch.nn.functional.pad(keyframes.long().cumsum(dim=1), (1, 0))  # (B, L + 1)
     inside = counts[clip, start + offset] - counts[clip, start + 1]
     return inside > 0
+
+
+def valid_frames(lengths: torch.Tensor, n_frames: int) -> torch.Tensor:
+    """(B, L) True at the first ``lengths`` (B,) frames of each clip, False on the padding after."""
+    return torch.arange(n_frames, device=lengths.device)[None] < lengths[:, None]

@@ -13,11 +13,14 @@ Step inputs (`step_input`):
 """
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 
+from keyin.data.segments import segment_frames
 from keyin.models.recurrent import MLP, LSTMBlock, init_forget_bias, state_from_vector
 
 STEP_INPUTS = ("boundaries", "autoregressive")
+LATENTS = ("posterior", "prior", "mean")
 
 
 class Interpolator(nn.Module):
@@ -149,3 +152,35 @@ class InterpolatorPosterior(nn.Module):
         final_output = outputs.gather(1, index).squeeze(1)  # (R, hidden)
         mu, log_sigma = self.head(final_output).chunk(2, dim=-1)  # (R, Zi) each
         return mu, log_sigma
+
+
+def interpolate_segments(
+    interpolator: Interpolator, posterior: InterpolatorPosterior | None, embeddings: Tensor,
+    clip: Tensor, start: Tensor, offset: Tensor, latent: str,
+) -> tuple[Tensor, Tensor, tuple[Tensor, Tensor] | None]:
+    """Interpolate segments of encoded clips between their boundary frames (stage 1).
+
+    Args:
+        embeddings: (B, L, E) encoded clips.
+        clip, start, offset: (R,) the segments (boundaries at ``start`` and ``start + offset``).
+        latent: "posterior" (z drawn from q(z | targets); a deterministic interpolator has none),
+            "prior" (z ~ N(0, I)) or "mean" (z = 0).
+    Returns:
+        predicted (R, S, E), valid (R, S) bool, and the posterior's (mu, log_sigma), each (R, Zi),
+        where z was drawn from it (else None).
+    """
+    if latent not in LATENTS:
+        raise ValueError(f"latent must be one of {LATENTS}, got {latent!r}")
+    device = embeddings.device
+    clip, start, offset = clip.to(device), start.to(device), offset.to(device)
+    frames, valid = segment_frames(start, offset, interpolator.max_offset)
+    z = embeddings.new_zeros(clip.shape[0], interpolator.latent_dim)
+    stats = None
+    if posterior is not None and latent == "posterior":
+        stats = posterior(embeddings[clip[:, None], frames], valid)
+        z = stats[0] + stats[1].exp() * torch.randn_like(stats[0])
+    elif latent == "prior":
+        z = torch.randn_like(z)
+    offset_onehot = F.one_hot(offset - 1, interpolator.max_offset).float()
+    predicted = interpolator(embeddings[clip, start], embeddings[clip, start + offset], offset_onehot, z)
+    return predicted, valid, stats

@@ -160,3 +160,20 @@ def test_boundaries_interpolator_learns_linear_interpolation_at_every_offset(sin
         error = squared_error[rows, :offset].mean()
         assert error < 0.03, f"offset {offset}: squared error {error:.3f}"
         assert error < 0.05 * copy_error[rows, :offset].mean()
+
+
+def test_interpolate_segments_draws_z_as_asked_and_refuses_an_unknown_latent():
+    from keyin.models.interpolator import interpolate_segments
+
+    torch.manual_seed(0)
+    interpolator = Interpolator(embed_dim=4, max_offset=3, latent_dim=2, hidden=8, layers=1, mlp_hidden=8)
+    posterior = InterpolatorPosterior(embed_dim=4, latent_dim=2, hidden=8)
+    embeddings, segments = torch.randn(2, 6, 4), (torch.tensor([0, 1]), torch.tensor([0, 2]), torch.tensor([3, 2]))
+    predicted, valid, stats = interpolate_segments(interpolator, posterior, embeddings, *segments, "posterior")
+    assert predicted.shape == (2, 3, 4) and valid.tolist() == [[True] * 3, [True, True, False]]
+    assert stats is not None and stats[0].shape == (2, 2)
+    mean, _, none = interpolate_segments(interpolator, posterior, embeddings, *segments, "mean")
+    zero = interpolator(embeddings[[0, 1], [0, 2]], embeddings[[0, 1], [3, 4]], torch.eye(3)[[2, 1]], torch.zeros(2, 2))
+    assert none is None and torch.allclose(mean, zero)
+    with pytest.raises(ValueError, match="latent must be one of"):
+        interpolate_segments(interpolator, posterior, embeddings, *segments, "median")

@@ -1,0 +1,96 @@
+"""Stage 1's training terms (REFERENCE §2.5, §2.7a): the image likelihood of interpolated segments
+and of auto-encoded frames, and the per-offset contrast that gates stage 2.
+
+The decoder is passed in as a callable ((R, E) embeddings → (R, C, H, W) logits), so these stay
+functions of tensors; ``keyin.lit.interpolator`` composes them.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+from keyin.data.segments import all_segments, crosses_keyframe, segment_frames
+
+Decoder = Callable[[Tensor], Tensor]
+# (clip, start, offset), each (R,) -> per-segment summed BCE (R,) and its frame count (R,)
+SegmentScorer = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, Tensor]]
+
+
+def segment_bce(
+    decoder: Decoder, predicted: Tensor, valid: Tensor, clips: Tensor, weights: Tensor | None,
+    clip: Tensor, start: Tensor, offset: Tensor,
+) -> tuple[Tensor, Tensor]:
+    """Summed (pixel-weighted) BCE of each segment's interpolated frames against the clip's.
+
+    Args:
+        predicted: (R, S, E) interpolated embeddings; valid: (R, S) which of them exist.
+        clips: (B, L, C, H, W) targets in [0, 1]; weights: like ``clips`` or None (plain BCE).
+        clip, start, offset: (R,) the segments.
+    Returns:
+        per-segment BCE (R,) and frames per segment (R,).
+    """
+    device = clips.device
+    frames, _ = segment_frames(start.to(device), offset.to(device), valid.shape[1])
+    rows = clip.to(device)[:, None]
+    targets = clips[rows, frames][valid]  # (V, C, H, W)
+    weights = None if weights is None else weights[rows, frames][valid]
+    bce = F.binary_cross_entropy_with_logits(decoder(predicted[valid]), targets, weights, reduction="none")
+    per_segment = torch.zeros(valid.shape[0], device=device).index_put_(
+        (valid.nonzero()[:, 0],), bce.flatten(1).sum(1), accumulate=True
+    )
+    return per_segment, valid.sum(1)
+
+
+def autoencoding_bce(
+    decoder: Decoder, frames: Tensor, embeddings: Tensor, weights: Tensor | None,
+    subset: int = 0, generator: torch.Generator | None = None,
+) -> Tensor:
+    """Summed (pixel-weighted) BCE of decoding the frames' own embeddings.
+
+    Args:
+        frames: (F, C, H, W); embeddings: (F, E); weights: like ``frames`` or None.
+        subset: > 0 decodes a uniform random subset of that many frames (drawn with ``generator``)
+            and rescales the sum to all F, an unbiased estimate at a fraction of the decoder's cost.
+    Returns:
+        () the sum over pixels and frames.
+    """
+    n_frames = frames.shape[0]
+    if 0 < subset < n_frames:
+        pick = torch.randperm(n_frames, generator=generator)[:subset].to(frames.device)
+        frames, embeddings = frames[pick], embeddings[pick]
+        weights = None if weights is None else weights[pick]
+    bce = F.binary_cross_entropy_with_logits(decoder(embeddings), frames, weights, reduction="sum")
+    return bce * n_frames / frames.shape[0]
+
+
+def offset_contrast(
+    score: SegmentScorer, keyframes: Tensor, last: Tensor, first: int, max_offset: int
+) -> dict[int, dict[str, float]]:
+    """Mean BCE per frame of segments with ("bent") and without ("straight") a labelled keyframe
+    strictly inside, per offset: the gate before stage 2 (PROTOTYPE-FINDINGS §4).
+
+    Args:
+        score: BCE and frame count of segments (:data:`SegmentScorer`).
+        keyframes: (B, L) bool labels on the clip axis.
+        last: (B,) each clip's last valid frame; segments reaching past it are left out.
+        first: the first frame a segment may start at (K^0, the last conditioning frame).
+    Returns:
+        ``{offset: {"straight": mean, "bent": mean}}`` for offsets 1..S (NaN where none).
+    """
+    table = {}
+    for offset in range(1, max_offset + 1):
+        clip, start, offs = all_segments(len(keyframes), first, keyframes.shape[1] - 1, offset)
+        inside = start + offs <= last[clip]
+        clip, start, offs = clip[inside], start[inside], offs[inside]
+        bce, count = score(clip, start, offs)
+        per_frame = bce / count
+        bent = crosses_keyframe(keyframes.cpu(), clip, start, offs).to(bce.device)
+        table[offset] = {
+            "straight": per_frame[~bent].mean().item() if (~bent).any() else float("nan"),
+            "bent": per_frame[bent].mean().item() if bent.any() else float("nan"),
+        }
+    return table
