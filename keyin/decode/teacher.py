@@ -14,6 +14,7 @@ from torch import Tensor
 
 from keyin.decode.segment_costs import embedding_costs
 from keyin.decode.segmentation import decode_by_length, segmentation_offsets
+from keyin.losses.soft_keyframe import boundary_teacher_loss, offset_teacher_loss
 
 
 @torch.no_grad()
@@ -42,3 +43,28 @@ def segmentation_targets(
         boundaries[row, clip_positions] = 1.0
     offsets = segmentation_offsets(positions, n_future, n_keyframes)
     return offsets.to(boundary_emb.device), boundaries.to(boundary_emb.device)
+
+
+def teacher_loss(
+    interpolator: torch.nn.Module, out: dict[str, Tensor | None], future_length: Tensor, n_keyframes: int,
+    keyframe_cost: float = 0.0, n_clips: int = 0,
+) -> Tensor:
+    """Cross-entropy of δ (and, where the model has boundary scores, of those) to the
+    :func:`segmentation_targets` of the first ``n_clips`` clips (0: all).
+
+    Args:
+        out: a :meth:`keyin.models.KEYIN.forward` of the clips (``boundary_emb``, ``offset_logits``,
+            ``boundary_scores``).
+        future_length: (B,) valid future frames.
+    Returns:
+        () the loss.
+    """
+    n_clips = n_clips or out["boundary_emb"].shape[0]
+    lengths = future_length[:n_clips]
+    offsets, boundaries = segmentation_targets(
+        interpolator, out["boundary_emb"][:n_clips].detach(), lengths, n_keyframes, keyframe_cost
+    )
+    loss = offset_teacher_loss(out["offset_logits"][:n_clips], offsets)
+    if out["boundary_scores"] is not None:
+        loss = loss + boundary_teacher_loss(out["boundary_scores"][:n_clips], boundaries, lengths)
+    return loss

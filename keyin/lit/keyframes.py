@@ -15,22 +15,14 @@ import lightning as L
 import torch
 
 from keyin.decode.rules import KEYIN_RULES, keyin_keyframes
-from keyin.decode.teacher import segmentation_targets
+from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.checkpoints import upgrade_state_dict
 from keyin.lit.interpolator import InterpolatorModule
+from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights
-from keyin.losses.soft_keyframe import (
-    argmax_positions,
-    boundary_teacher_loss,
-    gaussian_kl,
-    keyin_loss,
-    offset_entropy,
-    offset_teacher_loss,
-)
+from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
-
-FROZEN = ("encoder", "decoder", "interpolator")
 
 
 class KeyframeModule(L.LightningModule):
@@ -53,6 +45,7 @@ class KeyframeModule(L.LightningModule):
         beta_kl: float,
         normalize_key_targets: bool,
         lr: float,
+        # our additions (docs/decisions.md); these defaults are the paper's method
         teacher_weight: float = 0.0,
         teacher_clips: int = 0,
         offset_evidence: bool = False,
@@ -69,16 +62,8 @@ class KeyframeModule(L.LightningModule):
         self.save_hyperparameters()
         frozen = InterpolatorModule(**stage1)
         predictor = KeyframePredictor(
-            embed_dim=stage1["embed_dim"],
-            n_keyframes=n_keyframes,
-            max_offset=stage1["max_offset"],
-            latent_dim=latent_dim,
-            hidden=lstm_hidden,
-            layers=lstm_layers,
-            attn_scale=attn_scale,
-            offset_mode=offset_mode,
-            fixed_offset=fixed_offset,
-            offset_evidence=offset_evidence,
+            stage1["embed_dim"], n_keyframes, stage1["max_offset"], latent_dim, lstm_hidden, lstm_layers,
+            attn_scale=attn_scale, offset_mode=offset_mode, fixed_offset=fixed_offset, offset_evidence=offset_evidence,
         )
         self.model = KEYIN(frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"])
         self.freeze_stage1()
@@ -89,83 +74,45 @@ class KeyframeModule(L.LightningModule):
 
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
-        for name in FROZEN:
-            prefix = f"{name}."
-            part = {k[len(prefix) :]: v for k, v in state_dict.items() if k.startswith(prefix)}
-            getattr(self.model, name).load_state_dict(part)
+        self.model.load_stage1(state_dict)
 
     def freeze_stage1(self) -> None:
-        for name in FROZEN:
-            module = getattr(self.model, name)
-            module.requires_grad_(False)
-            module.eval()
+        self.model.freeze_stage1()
+
+    def train(self, mode: bool = True) -> "KeyframeModule":
+        """Switch the trainable parts; stage 1 stays frozen in eval mode (REFERENCE §8.1)."""
+        super().train(mode)
+        self.freeze_stage1()
+        return self
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
         # A keyin 0.1 checkpoint keeps the networks at the top level (encoder.*, predictor.*, ...).
         checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
 
-    def on_train_epoch_start(self) -> None:
-        self.freeze_stage1()
-
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
-        # Lightning puts every module back in train mode after validation (REFERENCE §8.1).
-        self.freeze_stage1()
+        self.freeze_stage1()  # whatever switched modes since (REFERENCE §8.1)
 
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> dict[str, torch.Tensor]:
         clips, future_length = batch["frames"], batch["future_length"]
-        n_cond = self.model.n_cond
+        hp, n_cond = self.hparams, self.model.n_cond
         out = self.model(clips, future_length)
-        weights = future_pixel_weights(self.pixel_weights(clips), n_cond)
         terms = keyin_loss(
-            offset_probs=out["offset_probs"],
-            key_emb_pred=out["key_emb"],
-            future_emb=out["future_emb"],
-            inter_frames_pred=out["frames"],
-            future_frames=clips[:, n_cond:].flatten(2),
-            kl_per_key=gaussian_kl(out["mu"], out["log_sigma"]),
-            lengths=future_length,
-            beta_ke=self.hparams.beta_ke,
-            beta_ki=self.hparams.beta_ki,
-            beta_kl=self.hparams.beta_kl,
-            normalize_key_targets=self.hparams.normalize_key_targets,
-            pixel_weights=weights,
+            out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
+            gaussian_kl(out["mu"], out["log_sigma"]), future_length, hp.beta_ke, hp.beta_ki, hp.beta_kl,
+            hp.normalize_key_targets, pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
         )
-        if stage == "train" and self.hparams.teacher_weight > 0:
-            teacher = self._teacher_loss(out, future_length)
-            terms["teacher"] = teacher
-            terms["loss"] = terms["loss"] + self.hparams.teacher_weight * teacher
-            self.log("train/teacher", teacher)
-        entropy = offset_entropy(out["offset_probs"])
-        self.log_dict(
-            {
-                f"{stage}/loss": terms["loss"],
-                f"{stage}/inter": terms["inter"].mean(),
-                f"{stage}/key_emb": terms["key_emb"].mean(),
-                f"{stage}/kl": terms["kl"].mean(),
-                f"{stage}/offset_entropy": entropy.mean(),
-                f"{stage}/n_inside": terms["c"].sum(-1).mean(),
-                f"{stage}/coverage_end": terms["coverage"][:, -1].mean(),
-            },
-            prog_bar=stage == "train",
-            sync_dist=stage == "val",  # under DDP: the mean over every rank's clips
-        )
+        if stage == "train" and hp.teacher_weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
+            terms["teacher"] = teacher_loss(
+                self.model.interpolator, out, future_length, hp.n_keyframes, hp.teacher_keyframe_cost, hp.teacher_clips
+            )
+            terms["loss"] = terms["loss"] + hp.teacher_weight * terms["teacher"]
+            self.log("train/teacher", terms["teacher"])
+        logged = {"loss": terms["loss"], "offset_entropy": offset_entropy(out["offset_probs"]).mean()}
+        logged |= {key: terms[key].mean() for key in ("inter", "key_emb", "kl")}
+        logged |= {"n_inside": terms["c"].sum(-1).mean(), "coverage_end": terms["coverage"][:, -1].mean()}
+        # under DDP, validation logs the mean over every rank's clips
+        self.log_dict({f"{stage}/{key}": value for key, value in logged.items()}, prog_bar=stage == "train", sync_dist=stage == "val")
         return terms
-
-    def _teacher_loss(self, out: dict[str, torch.Tensor], future_length: torch.Tensor) -> torch.Tensor:
-        """Cross-entropy of δ (and, with offset evidence, of the boundary scores) to the exact best
-        segmentation under the frozen interpolator (:mod:`keyin.decode.teacher`), on the first
-        ``teacher_clips`` clips (0: all). Off in the paper's setting; it keeps δ from collapsing to
-        one offset for every clip (docs/decisions.md)."""
-        n_clips = self.hparams.teacher_clips or out["boundary_emb"].shape[0]
-        lengths = future_length[:n_clips]
-        offsets, boundaries = segmentation_targets(
-            self.model.interpolator, out["boundary_emb"][:n_clips].detach(), lengths, self.hparams.n_keyframes,
-            self.hparams.teacher_keyframe_cost,
-        )
-        loss = offset_teacher_loss(out["offset_logits"][:n_clips], offsets)
-        if out["boundary_scores"] is not None:
-            loss = loss + boundary_teacher_loss(out["boundary_scores"][:n_clips], boundaries, lengths)
-        return loss
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         return self._shared_step(batch, "train")["loss"]
@@ -182,17 +129,13 @@ class KeyframeModule(L.LightningModule):
     ) -> list[list[int]]:
         """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
         "boundaries" or "map"; default: the module's ``discovery``), inside each clip."""
-        was_training = self.training
-        self.eval()
         clips = clips.to(self.device)
-        positions = keyin_keyframes(
-            self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
-            self.hparams.map_keyframe_cost, self.hparams.map_boundary_weight,
-            future_pixel_weights(self.pixel_weights(clips), self.model.n_cond),
-        )
-        self.train(was_training)
-        self.freeze_stage1()
-        return positions
+        with evaluating(self):
+            return keyin_keyframes(
+                self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
+                self.hparams.map_keyframe_cost, self.hparams.map_boundary_weight,
+                future_pixel_weights(self.pixel_weights(clips), self.model.n_cond),
+            )
 
     @torch.no_grad()
     def validation_pictures(self, batch: dict[str, torch.Tensor], count: int) -> dict[str, Any]:
@@ -205,22 +148,16 @@ class KeyframeModule(L.LightningModule):
             (discovered ones on the first two, the sample's own on the third); ``offsets`` (B, M)
             argmax offsets of the whole batch and ``max_offset`` S, for the histogram.
         """
-        was_training = self.training
-        self.eval()
         clips, lengths = batch["frames"].to(self.device), batch["future_length"].to(self.device)
-        posterior = self.model(clips, lengths, mode="posterior", sample=False)
-        prior = self.model(clips[:count], lengths[:count], mode="prior", sample=True)
-        self.train(was_training)
-        self.freeze_stage1()
-        discovered = self.discover(clips[:count], lengths[:count])
-        truth = keyframe_lists(batch["keyframes"][:count])
+        with evaluating(self):
+            posterior = self.model(clips, lengths, mode="posterior", sample=False)
+            prior = self.model(clips[:count], lengths[:count], mode="prior", sample=True)
+        discovered, truth = self.discover(clips[:count], lengths[:count]), keyframe_lists(batch["keyframes"][:count])
         sampled = argmax_positions(prior["offset_probs"]).tolist()
-        videos = [
-            clips[:count], self.model.argmax_video(clips, posterior)[:count], self.model.argmax_video(clips[:count], prior)
-        ]
+        videos = [clips[:count], self.model.argmax_video(clips, posterior)[:count], self.model.argmax_video(clips[:count], prior)]
         return {
             "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
-            "n_cond": self.hparams.stage1["n_cond"],
+            "n_cond": self.model.n_cond,
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
             "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),

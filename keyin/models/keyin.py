@@ -16,6 +16,8 @@ from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
 
+STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
+
 
 class KEYIN(nn.Module):
     """The keyframe model and the interpolator between its keyframes.
@@ -37,6 +39,17 @@ class KEYIN(nn.Module):
         super().__init__()
         self.encoder, self.decoder, self.interpolator, self.predictor = encoder, decoder, interpolator, predictor
         self.n_cond = n_cond
+
+    def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
+        """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""
+        for name in STAGE1:
+            prefix = f"{name}."
+            getattr(self, name).load_state_dict({k[len(prefix) :]: v for k, v in state_dict.items() if k.startswith(prefix)})
+
+    def freeze_stage1(self) -> None:
+        """No gradients into the stage-1 networks and eval mode for them; gradients still flow through."""
+        for name in STAGE1:
+            getattr(self, name).requires_grad_(False).eval()
 
     def keyframes(
         self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True
