@@ -1,7 +1,8 @@
-"""Choose discovery 'map''s keyframe price λ and boundary weight α on validation clips.
+"""Choose discovery 'map''s keyframe price λ and boundary weight α on validation clips, beside the
+label-free price "knee" (each clip's count at the knee of its cost curve, no λ).
 
     python benchmarks/choose_map_cost.py runs/<run>/checkpoints/keyframes/last.ckpt --clips 300 \
-        --costs 0 50 100 200 400 --weights 0 5 10 20 --out benchmarks/results/map_cost_<dataset>.md
+        --costs 0 50 100 200 400 knee --weights 0 5 10 20 --out benchmarks/results/choose_map_cost_<dataset>.md
 
 λ is in nats of the decoder's pixel BCE, so it depends on the frame size and content and is chosen
 again for each dataset (docs/decisions.md). The interpolation costs of every in-clip segment are
@@ -24,10 +25,15 @@ from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.decode.rules import with_sequence_ends
 from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
-from keyin.decode.segmentation import decode_by_length
-from keyin.eval.f1 import keyframe_lists, keyframe_scores
+from keyin.decode.segmentation import KNEE, decode_by_length
+from keyin.eval.f1 import column_scores, keyframe_lists, keyframe_scores
 from keyin.lit.checkpoints import load_trained_module
 from keyin.losses.image import future_pixel_weights
+
+
+def price(text: str) -> float | str:
+    """A λ in nats, or the word knee."""
+    return text if text == KNEE else float(text)
 
 
 @torch.no_grad()
@@ -37,7 +43,7 @@ def main() -> None:
     parser.add_argument("--clips", type=int, default=300)
     parser.add_argument("--split", default="val")
     parser.add_argument("--data-dir", default="data")
-    parser.add_argument("--costs", type=float, nargs="+", default=[0, 50, 100, 200, 400])
+    parser.add_argument("--costs", type=price, nargs="+", default=[0, 50, 100, 200, 400, KNEE])
     parser.add_argument("--weights", type=float, nargs="+", default=[0, 5, 10, 20])
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
@@ -62,7 +68,7 @@ def main() -> None:
     }
     seconds = time.perf_counter() - started
     max_offset, n_keys = model.predictor.max_offset, module.hparams.n_keyframes
-    rows = [f"| λ (nats) | α | F1 | ±1 F1 | precision | recall | keyframes/clip |", "|---|---|---|---|---|---|---|"]
+    rows = ["| λ (nats) | α | F1 | F1 interior | ±1 F1 | precision | recall | keyframes/clip |", "|---|---|---|---|---|---|---|---|"]
     for cost in args.costs:
         for weight in args.weights:
             scores = keys.boundary_scores
@@ -77,15 +83,18 @@ def main() -> None:
 
             interior = decode_by_length(segment_costs, lengths, n_keys, max_offset, cost)
             predicted = with_sequence_ends(interior, lengths, stage1["n_future"])  # as KeyframeModule.discover
-            s = keyframe_scores(predicted, keyframe_lists(batch["keyframes"]), stage1["n_future"])
+            truth = keyframe_lists(batch["keyframes"])
+            s = keyframe_scores(predicted, truth, stage1["n_future"])
+            f1_interior = column_scores(predicted, truth, lengths.tolist(), stage1["n_future"])["f1_interior"]
             per_clip = sum(map(len, predicted)) / len(predicted)
-            rows.append(f"| {cost:g} | {weight:g} | {s['f1']:.3f} | {s['f1_tol1']:.3f} | {s['precision']:.3f} | "
-                        f"{s['recall']:.3f} | {per_clip:.2f} |")
+            label = cost if cost == KNEE else f"{cost:g}"
+            rows.append(f"| {label} | {weight:g} | {s['f1']:.3f} | {f1_interior:.3f} | {s['f1_tol1']:.3f} | "
+                        f"{s['precision']:.3f} | {s['recall']:.3f} | {per_clip:.2f} |")
     true_per_clip = batch["keyframes"].sum().item() / len(clips)
     report = "\n".join([
         f"## Discovery 'map': keyframe price λ and boundary weight α on {len(clips)} {args.split} clips ({dataset['name']})\n",
         f"- command: `python benchmarks/choose_map_cost.py {args.ckpt} --clips {args.clips} --split {args.split} --costs "
-        f"{' '.join(f'{c:g}' for c in args.costs)} --weights {' '.join(f'{w:g}' for w in args.weights)}`",
+        f"{' '.join(str(c) if c == KNEE else f'{c:g}' for c in args.costs)} --weights {' '.join(f'{w:g}' for w in args.weights)}`",
         f"- machine: {cpu_model()}, {torch.get_num_threads()} threads, torch {torch.__version__}, {date.today()}; "
         f"segment costs in {seconds:.0f} s; {true_per_clip:.2f} true keyframes per clip\n",
         *rows,

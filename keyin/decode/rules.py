@@ -15,7 +15,7 @@ from torch import Tensor
 from keyin.decode.ends import sequence_ends, with_ends
 from keyin.decode.offsets import offset_keyframes
 from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
-from keyin.decode.segmentation import decode_by_length
+from keyin.decode.segmentation import KeyframeCost, decode_by_length
 from keyin.losses.image import future_pixel_weights
 from keyin.models.keyin import KEYIN
 
@@ -60,7 +60,7 @@ def map_keyframes(
     frames: Tensor,
     lengths: Tensor,
     n_keyframes: int,
-    keyframe_cost: float,
+    keyframe_cost: KeyframeCost,
     scores: Tensor | None = None,
     boundary_weight: float = 0.0,
     weights: Tensor | None = None,
@@ -134,7 +134,7 @@ def keyin_keyframes(
     clips: Tensor,
     future_length: Tensor,
     rule: str = "offsets",
-    keyframe_cost: float = 0.0,
+    keyframe_cost: KeyframeCost = 0.0,
     boundary_weight: float = 0.0,
     pixel_weights: Tensor | None = None,
 ) -> list[list[int]]:
@@ -147,7 +147,8 @@ def keyin_keyframes(
             "boundaries" (with offset evidence: the most likely keyframe set under LSTM_inf's
             per-frame boundary scores, within M gaps of at most S) or "map" (the exact best
             segmentation under the frozen interpolator's pixel BCE with ``keyframe_cost`` per
-            keyframe, plus ``boundary_weight`` times the boundary scores where there are any).
+            keyframe, or each clip's knee count for ``"knee"`` (label-free), plus
+            ``boundary_weight`` times the boundary scores where there are any).
         pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
     Returns:
         Per clip, the keyframe positions inside its valid frames; "boundaries" and "map" add the

@@ -30,27 +30,14 @@ def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tens
     return start[inside], offset[inside]
 
 
-def best_segmentation(costs: Tensor, n_keyframes: int, keyframe_cost: float = 0.0) -> tuple[Tensor, list[list[int]]]:
-    """Minimum-cost segmentation of ``0 … N`` into at most M gaps of at most S (exact DP).
+KNEE = "knee"  # the label-free keyframe price: each clip's count at the knee of its cost curve
+KeyframeCost = float | str  # nats per keyframe, or KNEE
 
-    Args:
-        costs: (B, N, S) cost of the segment from extended index ``a`` with offset ``o = s + 1``;
-            ``inf`` where ``a + o > N``.
-        n_keyframes: M, the most segments (keyframes) allowed.
-        keyframe_cost: a price per segment (per keyframe, the closing one included). At 0 the
-            optimum of an interpolation cost uses every gap it may, since a shorter segment is
-            always a little easier; a price keeps only the keyframes that pay for themselves.
-    Returns:
-        total (B,) the minimum summed cost, and per clip the keyframe *positions* (future frame
-        indices ``k - 1``) of the interior boundaries, the final boundary at ``N - 1`` excluded.
-    Raises:
-        ValueError: if M·S < N (no segmentation exists).
-    """
+
+def _count_tables(costs: Tensor, n_keyframes: int) -> tuple[Tensor, Tensor]:
+    """The DP over (count, index): ``best[m, b, k]`` the cheapest cover of 0…k by exactly m gaps
+    (inf where none), ``back[m, b, k]`` the offset of its last gap; both (M + 1, B, N + 1)."""
     batch, n_future, max_offset = costs.shape
-    if n_keyframes * max_offset < n_future:
-        raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
-    costs = costs.cpu() + keyframe_cost
-    # best[m, b, k]: cheapest cover of 0…k by exactly m gaps; back[m, b, k]: the gap's offset.
     best = torch.full((n_keyframes + 1, batch, n_future + 1), float("inf"), dtype=costs.dtype)
     back = torch.zeros((n_keyframes + 1, batch, n_future + 1), dtype=torch.long)
     best[0, :, 0] = 0.0
@@ -60,7 +47,66 @@ def best_segmentation(costs: Tensor, n_keyframes: int, keyframe_cost: float = 0.
             candidates = best[m - 1][:, k - offsets] + costs[:, k - offsets, offsets - 1]  # (B, o)
             best[m, :, k], arg = candidates.min(dim=1)
             back[m, :, k] = offsets[arg]
-    total, n_gaps = best[:, :, n_future].min(dim=0)  # over m
+    return best, back
+
+
+def knee_counts(totals: Tensor) -> Tensor:
+    """Per clip, the number of gaps at the knee of its cost curve (label-free, our rule).
+
+    With ``g(m) = C(m - 1) - C(m)`` what the m-th gap saves (and ``g = 0`` past the most feasible
+    gaps), the knee is the m after which the saving falls the most, ``argmax g(m) - g(m + 1)`` over
+    the feasible m above the fewest: the last keyframe before adding one stops paying. It needs no
+    scale (no price in nats) and no labels; it never picks the fewest feasible gaps unless that is
+    the only count.
+
+    Args:
+        totals: (B, M + 1) the cheapest cost with exactly m gaps, inf where m gaps cannot cover.
+    Returns:
+        (B,) int64 counts; ties go to the fewer gaps.
+    """
+    feasible = totals.isfinite()
+    savings = torch.zeros_like(totals)
+    savings[:, 1:] = torch.where(feasible[:, 1:] & feasible[:, :-1], totals[:, :-1] - totals[:, 1:], 0.0)
+    falls = savings - torch.cat([savings[:, 1:], torch.zeros_like(savings[:, :1])], dim=1)  # g(m) - g(m + 1)
+    candidates = feasible & torch.cat([torch.zeros_like(feasible[:, :1]), feasible[:, :-1]], dim=1)
+    only = feasible.long().argmax(1)  # the fewest feasible gaps, where nothing else is feasible
+    best = torch.where(candidates, falls, -float("inf")).argmax(1)
+    return torch.where(candidates.any(1), best, only)
+
+
+def best_segmentation(
+    costs: Tensor, n_keyframes: int, keyframe_cost: KeyframeCost = 0.0
+) -> tuple[Tensor, list[list[int]]]:
+    """Minimum-cost segmentation of ``0 … N`` into at most M gaps of at most S (exact DP).
+
+    Args:
+        costs: (B, N, S) cost of the segment from extended index ``a`` with offset ``o = s + 1``;
+            ``inf`` where ``a + o > N``.
+        n_keyframes: M, the most segments (keyframes) allowed.
+        keyframe_cost: a price per segment (per keyframe, the closing one included). At 0 the
+            optimum of an interpolation cost uses every gap it may, since a shorter segment is
+            always a little easier; a price keeps only the keyframes that pay for themselves.
+            ``"knee"`` (:data:`KNEE`): no price; each clip gets the best segmentation with the
+            number of gaps of :func:`knee_counts`.
+    Returns:
+        total (B,) the summed cost of the chosen segmentation (prices included), and per clip the
+        keyframe *positions* (future frame indices ``k - 1``) of the interior boundaries, the final
+        boundary at ``N - 1`` excluded.
+    Raises:
+        ValueError: if M·S < N (no segmentation exists), or for a price that is neither a number nor "knee".
+    """
+    batch, n_future, max_offset = costs.shape
+    if n_keyframes * max_offset < n_future:
+        raise ValueError(f"M*S = {n_keyframes * max_offset} cannot cover N = {n_future}")
+    if isinstance(keyframe_cost, str) and keyframe_cost != KNEE:
+        raise ValueError(f"keyframe_cost must be a number (nats per keyframe) or {KNEE!r}, got {keyframe_cost!r}")
+    price = 0.0 if keyframe_cost == KNEE else float(keyframe_cost)
+    best, back = _count_tables(costs.cpu() + price, n_keyframes)
+    if keyframe_cost == KNEE:
+        n_gaps = knee_counts(best[:, :, n_future].T)
+        total = best[:, :, n_future].T.gather(1, n_gaps[:, None]).squeeze(1)
+    else:
+        total, n_gaps = best[:, :, n_future].min(dim=0)  # over m
     positions: list[list[int]] = []
     for b in range(batch):
         k, m, boundaries = n_future, int(n_gaps[b]), []
@@ -77,7 +123,7 @@ def decode_by_length(
     lengths: Tensor,
     n_keyframes: int,
     max_offset: int,
-    keyframe_cost: float = 0.0,
+    keyframe_cost: KeyframeCost = 0.0,
 ) -> list[list[int]]:
     """Best segmentation of clips of different valid lengths, each closing at its own last frame.
 

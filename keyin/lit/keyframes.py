@@ -15,6 +15,7 @@ import lightning as L
 import torch
 
 from keyin.decode.rules import KEYIN_RULES, keyin_keyframes
+from keyin.decode.segmentation import KNEE
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.checkpoints import upgrade_state_dict
@@ -51,12 +52,14 @@ class KeyframeModule(L.LightningModule):
         offset_evidence: bool = False,
         discovery: str = "offsets",
         teacher_keyframe_cost: float = 0.0,
-        map_keyframe_cost: float = 120.0,
+        map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
     ) -> None:
         super().__init__()
         if discovery not in KEYIN_RULES:
             raise ValueError(f"discovery must be one of {KEYIN_RULES}, got {discovery!r}")
+        if isinstance(map_keyframe_cost, str) and map_keyframe_cost != KNEE:
+            raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
         if discovery == "boundaries" and not offset_evidence:
             raise ValueError("discovery='boundaries' needs offset_evidence (the boundary scores)")
         self.save_hyperparameters()

@@ -18,7 +18,8 @@ KEYFRAMES, KEY_LATENT = 3, 2
 CONV = dict(image_size=SIZE, channels=3, embed_dim=8, conv_width=4, coord_channels=True, norm="batch", mlp_hidden=16)
 
 
-def keyframe_module() -> KeyframeModule:
+def keyframe_module(**additions) -> KeyframeModule:
+    """``additions``: keyword arguments of our additions (``offset_evidence``, ``discovery``, ...)."""
     torch.manual_seed(0)
     stage1 = InterpolatorModule(
         **CONV, n_cond=1, n_future=6, max_offset=3, latent_dim=2, lstm_hidden=16, lstm_layers=1,
@@ -27,7 +28,7 @@ def keyframe_module() -> KeyframeModule:
     return KeyframeModule(
         stage1=dict(stage1.hparams), n_keyframes=KEYFRAMES, latent_dim=KEY_LATENT, lstm_hidden=16, lstm_layers=1,
         attn_scale=True, offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
-        normalize_key_targets=True, lr=1e-3,
+        normalize_key_targets=True, lr=1e-3, **additions,
     )
 
 
