@@ -102,7 +102,7 @@ class KeyframeModule(L.LightningModule):
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
         # A keyin 0.1 checkpoint keeps the networks at the top level (encoder.*, predictor.*, ...).
-        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], self.stage)
 
     def on_train_epoch_start(self) -> None:
         self.freeze_stage1()
