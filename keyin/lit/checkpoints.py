@@ -17,8 +17,12 @@ from keyin.io import atomic_write_bytes
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
 VERSION_KEY = "keyin_version"
-# keyin 0.1 kept stage 2's networks at the top of its LightningModule; since 0.2 they are its KEYIN model's.
-KEYIN_NETWORKS = ("encoder.", "decoder.", "interpolator.", "predictor.")
+# Stage → the networks its LightningModule once kept at the top level and its model (``module.model``)
+# holds now: keyin 0.1's stage 2 (a KEYIN model since 0.2) and the Surprise baseline (an SVG model).
+MODEL_NETWORKS = {
+    "keyframes": ("encoder.", "decoder.", "interpolator.", "predictor."),
+    "surprise": ("encoder.", "decoder.", "core."),
+}
 PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
 
 
@@ -34,10 +38,12 @@ class RunConfigInCheckpoint(L.Callback):
         checkpoint[VERSION_KEY] = __version__
 
 
-def upgrade_state_dict(state_dict: Mapping[str, Any]) -> dict[str, Any]:
-    """A stage-2 state dict in this version's layout (``model.encoder.*``, ...); one of keyin 0.1
-    (``encoder.*``, ...) is renamed, one of today is returned as it is."""
-    return {f"model.{name}" if name.startswith(KEYIN_NETWORKS) else name: value for name, value in state_dict.items()}
+def upgrade_state_dict(state_dict: Mapping[str, Any], stage: str) -> dict[str, Any]:
+    """A state dict of ``stage`` in this version's layout (``model.encoder.*``, ...): one in the old
+    layout (``encoder.*``, ...; :data:`MODEL_NETWORKS`) is renamed, one of today, or of a stage
+    without a model, is returned as it is."""
+    networks = MODEL_NETWORKS.get(stage, ())
+    return {f"model.{name}" if name.startswith(networks) else name: value for name, value in state_dict.items()}
 
 
 def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
@@ -74,8 +80,7 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
         ) from None
     if not isinstance(checkpoint, dict) or STAGE_KEY not in checkpoint:
         raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry); {PASS_A_CHECKPOINT}")
-    if checkpoint[STAGE_KEY] == "keyframes":
-        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
+    checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], checkpoint[STAGE_KEY])
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"

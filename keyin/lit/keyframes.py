@@ -90,7 +90,7 @@ class KeyframeModule(L.LightningModule):
 
     def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
         # A keyin 0.1 checkpoint keeps the networks at the top level (encoder.*, predictor.*, ...).
-        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], self.stage)
 
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
         self.freeze_stage1()  # whatever switched modes since (REFERENCE §8.1)

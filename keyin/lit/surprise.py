@@ -13,20 +13,15 @@ from typing import Any, Callable
 
 import lightning as L
 import torch
-import torch.nn.functional as F
 
+from keyin.data.segments import valid_frames
 from keyin.decode.surprise import surprise_keyframes
 from keyin.eval.f1 import discovery_summary, keyframe_lists
+from keyin.lit.checkpoints import upgrade_state_dict
+from keyin.lit.modes import evaluating
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.soft_keyframe import gaussian_kl
-from keyin.models import ConvDecoder, ConvEncoder, SVGCore
-
-
-def kl_schedule(step: int, beta: float, warmup: int, delay: int) -> float:
-    """KL weight at ``step``: 0 for ``delay`` steps, then rising linearly to ``beta`` over ``warmup``."""
-    if step < delay:
-        return 0.0
-    return beta * (min(1.0, (step - delay) / warmup) if warmup > 0 else 1.0)
+from keyin.losses.svg import SVGTerms, kl_reveal_ratio, kl_schedule, svg_loss, svg_terms
+from keyin.models import SVG, ConvDecoder, ConvEncoder, SVGCore
 
 
 class SurpriseModule(L.LightningModule):
@@ -47,37 +42,16 @@ class SurpriseModule(L.LightningModule):
             first; even a small weight can collapse the posterior while it cannot).
         foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels,
             as in KEYIN's stage 1 (keyin/losses/image.py; 1: plain BCE).
-        skips: SVG's skip connections: every frame is decoded with the encoder features of the
-            clip's last conditioning frame, so the predictor need not carry the static scene
-            (False: KEYIN's decoder, no skips).
+        skips: SVG's skip connections (:class:`keyin.models.SVG`; False: KEYIN's decoder, no skips).
     """
 
     stage = "surprise"
 
     def __init__(
-        self,
-        image_size: int,
-        channels: int,
-        n_cond: int,
-        n_future: int,
-        n_keyframes: int,
-        embed_dim: int,
-        conv_width: int,
-        coord_channels: bool,
-        norm: str,
-        latent_dim: int,
-        lstm_hidden: int,
-        predictor_layers: int,
-        posterior_layers: int,
-        beta: float,
-        lr: float,
-        shift: int = -1,
-        ae_weight: float = 0.0,
-        beta_warmup: int = 0,
-        beta_delay: int = 0,
-        foreground_weight: float = 1.0,
-        foreground_threshold: float = 0.1,
-        skips: bool = False,
+        self, image_size: int, channels: int, n_cond: int, n_future: int, n_keyframes: int, embed_dim: int,
+        conv_width: int, coord_channels: bool, norm: str, latent_dim: int, lstm_hidden: int, predictor_layers: int,
+        posterior_layers: int, beta: float, lr: float, shift: int = -1, ae_weight: float = 0.0, beta_warmup: int = 0,
+        beta_delay: int = 0, foreground_weight: float = 1.0, foreground_threshold: float = 0.1, skips: bool = False,
     ) -> None:
         super().__init__()
         self.save_hyperparameters()
@@ -85,109 +59,54 @@ class SurpriseModule(L.LightningModule):
             image_size=image_size, channels=channels, width=conv_width, embed_dim=embed_dim,
             coord_channels=coord_channels, norm=norm,
         )
-        self.encoder = ConvEncoder(**conv)
-        self.decoder = ConvDecoder(**conv, skips=skips)
-        self.core = SVGCore(embed_dim, latent_dim, lstm_hidden, predictor_layers, posterior_layers)
+        encoder, decoder = ConvEncoder(**conv), ConvDecoder(**conv, skips=skips)  # in this order: the seed's draws
+        core = SVGCore(embed_dim, latent_dim, lstm_hidden, predictor_layers, posterior_layers)
+        self.model = SVG(encoder, decoder, core, n_cond)
 
-    def _valid(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
-        """(B, L) True for the conditioning frames and the valid future frames."""
-        steps = torch.arange(clips.shape[1], device=clips.device)
-        return steps[None] < self.hparams.n_cond + future_length.to(clips.device)[:, None]
+    def on_load_checkpoint(self, checkpoint: dict[str, Any]) -> None:
+        # Checkpoints from before the SVG model keep its networks at the top level (encoder.*, core.*, ...).
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], self.stage)
 
-    def encode(self, clips: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor] | None]:
-        """(B, L, E) embeddings of (B, L, C, H, W) clips, and the decoder's context: with skips the
-        encoder features of each clip's last conditioning frame (B, F·2^i, h_i, h_i), else None."""
-        if not self.hparams.skips:
-            return self.encoder(clips), None
-        embeddings, skips = self.encoder.embed_with_skips(clips)
-        return embeddings, [features[:, self.hparams.n_cond - 1] for features in skips]
-
-    def decode(self, embeddings: torch.Tensor, context: list[torch.Tensor] | None) -> torch.Tensor:
-        """(B, T, C, H, W) logits of (B, T, E) embeddings with the context of :meth:`encode`
-        (its batch B or 1, broadcast over B and T)."""
-        if context is None:
-            return self.decoder(embeddings)
-        batch, steps = embeddings.shape[:2]
-        return self.decoder(embeddings, [features.unsqueeze(1).expand(batch, steps, -1, -1, -1) for features in context])
-
-    def _terms(
-        self, batch: dict[str, torch.Tensor], sample: bool = True
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Per-step prediction BCE and KL of frames 1 … L-1 (B, L-1), zero on padding, the valid
-        mask (B, L-1), and the summed auto-encoding BCE of the valid frames (scalar). ``sample``
-        False predicts from the posterior mean (deterministic: validation)."""
+    def _terms(self, batch: dict[str, torch.Tensor], sample: bool = True) -> SVGTerms:
+        """The loss terms of a batch; ``sample`` False predicts from the posterior mean (validation)."""
         clips = batch["frames"]
-        valid_all = self._valid(clips, batch["future_length"])
-        valid = valid_all[:, 1:]
-        embeddings, context = self.encode(clips)
-        predicted, mu, log_sigma = self.core(embeddings, sample=sample)
-        weights = model_pixel_weights(clips, self.hparams)
-        logits = self.decode(predicted, context)
-        bce = F.binary_cross_entropy_with_logits(
-            logits, clips[:, 1:], None if weights is None else weights[:, 1:], reduction="none"
-        ).flatten(2).sum(-1)
-        kl = gaussian_kl(mu[:, 1:], log_sigma[:, 1:])
-        autoencoding = clips.new_zeros(())
-        if self.hparams.ae_weight > 0:
-            autoencoding = F.binary_cross_entropy_with_logits(
-                self.decode(embeddings, context)[valid_all], clips[valid_all],
-                None if weights is None else weights[valid_all], reduction="sum",
-            )
-        return bce * valid, kl * valid, valid, autoencoding
+        out = self.model(clips, sample=sample, reconstruct=self.hparams.ae_weight > 0)
+        valid = valid_frames(self.hparams.n_cond + batch["future_length"].to(clips.device), clips.shape[1])
+        return svg_terms(*out, clips, valid, model_pixel_weights(clips, self.hparams))
 
-    def kl_weight(self) -> float:
-        """The KL weight at the current training step (:func:`kl_schedule`)."""
+    def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> tuple[torch.Tensor, SVGTerms]:
+        """The loss of a batch and its terms, logged with the KL weight (warming up in training)."""
+        terms = self._terms(batch, sample=stage == "train")
         hp = self.hparams
-        return kl_schedule(self.global_step, hp.beta, hp.beta_warmup, hp.beta_delay)
-
-    def _log_terms(
-        self, stage: str, bce: torch.Tensor, kl: torch.Tensor, valid: torch.Tensor, autoencoding: torch.Tensor
-    ) -> torch.Tensor:
-        beta = self.kl_weight() if stage == "train" else self.hparams.beta
-        loss = (bce.sum() + beta * kl.sum() + self.hparams.ae_weight * autoencoding) / bce.shape[0]
-        n_steps = valid.sum()
+        beta = kl_schedule(self.global_step, hp.beta, hp.beta_warmup, hp.beta_delay) if stage == "train" else hp.beta
+        loss, n_steps = svg_loss(terms, beta, hp.ae_weight), terms.valid.sum()
         self.log_dict(
             {
                 f"{stage}/loss": loss,
-                f"{stage}/bce_per_frame": bce.sum() / n_steps,
-                f"{stage}/kl_per_step": kl.sum() / n_steps,  # → 0 is the KL collapse to watch for
+                f"{stage}/bce_per_frame": terms.bce.sum() / n_steps,
+                f"{stage}/kl_per_step": terms.kl.sum() / n_steps,  # → 0 is the KL collapse to watch for
                 f"{stage}/kl_weight": beta,
             },
             prog_bar=stage == "train",
             sync_dist=stage == "val",  # under DDP: the mean over every rank's clips
         )
-        return loss
+        return loss, terms
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
-        return self._log_terms("train", *self._terms(batch))
+        return self._shared_step(batch, "train")[0]
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
-        bce, kl, valid, autoencoding = self._terms(batch, sample=False)
-        self._log_terms("val", bce, kl, valid, autoencoding)
-        # Is the KL where the turns are? Mean KL at the frames after a vertex over that elsewhere.
-        n_cond = self.hparams.n_cond
-        reveals = F.pad(batch["keyframes"], (n_cond, 0))[:, :-1].bool()  # (B, L-1): step t+1 after vertex t
-        future_kl = kl.masked_fill(~valid, float("nan"))
-        future_kl[:, : n_cond - 1] = float("nan")  # the conditioning frames have no labels
-        ratio = future_kl[reveals].nanmean() / future_kl[~reveals].nanmean().clamp_min(1e-9)
+        _, terms = self._shared_step(batch, "val")
+        ratio = kl_reveal_ratio(terms.kl, terms.valid, batch["keyframes"], self.hparams.n_cond)
         self.log("val/kl_reveal_ratio", ratio, sync_dist=True)
-        predicted = self.discover(batch["frames"], batch["future_length"])
-        summary = discovery_summary(predicted, batch["keyframes"])
+        summary = discovery_summary(self.discover(batch["frames"], batch["future_length"]), batch["keyframes"])
         self.log_dict({f"val/{key}": value for key, value in summary.items()}, prog_bar=True, sync_dist=True)
-
-    @torch.no_grad()
-    def surprise(self, clips: torch.Tensor) -> torch.Tensor:
-        """(B, L) KL of the posterior to the prior at every step of (B, L, C, H, W) clips."""
-        mu, log_sigma = self.core.posterior_stats(self.encoder(clips.to(self.device)))
-        return gaussian_kl(mu, log_sigma)
 
     @torch.no_grad()
     def discover(self, clips: torch.Tensor, future_length: torch.Tensor, shift: int | None = None) -> list[list[int]]:
         """Keyframe positions: the M largest KL peaks, shifted by ``shift`` (default: the module's)."""
-        was_training = self.training
-        self.eval()
-        kl = self.surprise(clips).cpu()
-        self.train(was_training)
+        with evaluating(self):
+            kl = self.model.surprise(clips.to(self.device)).cpu()
         shift = self.hparams.shift if shift is None else shift
         return surprise_keyframes(kl, future_length.cpu(), self.hparams.n_cond, self.hparams.n_keyframes, shift)
 
@@ -202,17 +121,14 @@ class SurpriseModule(L.LightningModule):
             ``surprise`` (count, L) the KL per step (NaN on padding) with ``surprise_truth`` /
             ``surprise_predicted`` for the KL curves.
         """
-        was_training = self.training
-        self.eval()
         clips, lengths = batch["frames"][:count].to(self.device), batch["future_length"][:count]
-        embeddings, context = self.encode(clips)
-        predicted, _, _ = self.core(embeddings, sample=False)
-        frames = torch.sigmoid(self.decode(predicted, context))
-        kl = self.surprise(clips).masked_fill(~self._valid(clips, lengths), float("nan")).cpu()
-        self.train(was_training)
+        with evaluating(self):
+            predicted = self.model.one_step_video(clips)
+            valid = valid_frames(self.hparams.n_cond + lengths.to(self.device), clips.shape[1])
+            kl = self.model.surprise(clips).masked_fill(~valid, float("nan")).cpu()
         truth = keyframe_lists(batch["keyframes"][:count])
         discovered = self.discover(clips, lengths)
-        videos = [clips, torch.cat([clips[:, :1], frames], dim=1)]
+        videos = [clips, predicted]
         return {
             "clips": torch.stack(videos, dim=1).flatten(0, 1).cpu(),
             "n_cond": self.hparams.n_cond,

@@ -15,20 +15,12 @@ from typing import Callable
 
 import lightning as L
 import torch
-import torch.nn.functional as F
 from torch.utils.data import Dataset
 
 from keyin.eval.tap import save_subgoal_grid, score_whole_clips
+from keyin.lit.modes import evaluating
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.tap import (
-    admissible_frames,
-    argmin_times,
-    min_over_time_bce,
-    pair_images,
-    sample_pairs,
-    shortest_gap,
-    whole_clip_pairs,
-)
+from keyin.losses.tap import argmin_times, pair_autoencoding_bce, pair_bce, sample_pairs, shortest_gap, whole_clip_pairs
 from keyin.models import TAPNetwork
 
 
@@ -90,21 +82,11 @@ class TAPModule(L.LightningModule):
         self, frames: torch.Tensor, n_valid: torch.Tensor, start: torch.Tensor, goal: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor]:
         """Min-over-time loss (B,) and chosen frame (B,) of predictions between ``start`` and
-        ``goal`` (B,) of (B, L, C, H, W) clips with ``n_valid`` (B,) valid frames."""
+        ``goal`` (B,) of (B, L, C, H, W) clips with ``n_valid`` (B,) valid frames
+        (:func:`keyin.losses.tap.pair_bce`)."""
         frames, n_valid, start, goal = (x.to(self.device) for x in (frames, n_valid, start, goal))
-        logits = self.network(*pair_images(frames, start, goal))
-        admissible = admissible_frames(start, goal, n_valid, frames.shape[1], self.hparams.margin)
-        return min_over_time_bce(logits, frames, admissible, model_pixel_weights(frames, self.hparams))
-
-    def autoencoding_bce(self, frames: torch.Tensor, start: torch.Tensor, goal: torch.Tensor) -> torch.Tensor:
-        """(B,) BCE of the start and goal frames decoded from their own embeddings, summed over
-        pixels and both frames (pixel-weighted like the min-over-time loss)."""
         weights = model_pixel_weights(frames, self.hparams)
-        images = torch.stack(pair_images(frames, start, goal), dim=1)  # (B, 2, C, H, W)
-        logits = self.network.decoder(self.network.encoder(images).flatten(0, 1)).view_as(images)
-        pair_weights = None if weights is None else torch.stack(pair_images(weights, start, goal), dim=1)
-        bce = F.binary_cross_entropy_with_logits(logits, images, pair_weights, reduction="none")
-        return bce.flatten(1).sum(-1)
+        return pair_bce(self.network, frames, n_valid, start, goal, self.hparams.margin, weights)
 
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> torch.Tensor:
         frames = batch["frames"]
@@ -113,7 +95,8 @@ class TAPModule(L.LightningModule):
             start, goal = sample_pairs(n_valid, self.least_gap, self.hparams.max_gap)
         else:
             start, goal = whole_clip_pairs(n_valid)
-        loss, argmin = self.pair_terms(frames, n_valid, start, goal)
+        weights = model_pixel_weights(frames, self.hparams)
+        loss, argmin = pair_bce(self.network, frames, n_valid, start, goal, self.hparams.margin, weights)
         relative, at_last = argmin_times(argmin, start, goal, self.hparams.margin)
         mean_loss = loss.mean()
         terms = {
@@ -122,7 +105,7 @@ class TAPModule(L.LightningModule):
             f"{stage}/argmin_last": at_last.float().mean(),  # chosen frame = the last admissible one
         }
         if self.hparams.ae_weight > 0:
-            autoencoding = self.autoencoding_bce(frames.to(self.device), start.to(self.device), goal.to(self.device))
+            autoencoding = pair_autoencoding_bce(self.network, frames, start, goal, weights)
             terms[f"{stage}/autoencoding_per_pixel"] = autoencoding.mean() / (2 * frames[0, 0].numel())
             mean_loss = mean_loss + self.hparams.ae_weight * autoencoding.mean()
         self.log_dict(
@@ -142,10 +125,8 @@ class TAPModule(L.LightningModule):
     def subgoal(self, start_images: torch.Tensor, goal_images: torch.Tensor) -> torch.Tensor:
         """TAP's prediction between (B, C, H, W) start and goal images in [0, 1]: (B, C, H, W)
         in [0, 1], on the inputs' device."""
-        was_training = self.training
-        self.eval()
-        logits = self.network(start_images.to(self.device), goal_images.to(self.device))
-        self.train(was_training)
+        with evaluating(self):
+            logits = self.network(start_images.to(self.device), goal_images.to(self.device))
         return torch.sigmoid(logits).to(start_images.device)
 
     @torch.no_grad()

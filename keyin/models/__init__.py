@@ -6,7 +6,7 @@ from keyin.models.interpolator import Interpolator, InterpolatorPosterior
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
 from keyin.models.keyin import KEYIN
 from keyin.models.recurrent import MLP, LSTMBlock, LSTMState, state_from_vector
-from keyin.models.svg import SVGCore
+from keyin.models.svg import SVG, SVGCore, SVGOutput
 from keyin.models.tap import TAPNetwork
 
 __all__ = [
@@ -20,7 +20,9 @@ __all__ = [
     "LSTMBlock",
     "LSTMState",
     "MLP",
+    "SVG",
     "SVGCore",
+    "SVGOutput",
     "TAPNetwork",
     "attention_posterior",
     "state_from_vector",

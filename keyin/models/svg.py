@@ -1,4 +1,5 @@
-"""SVG-FP's recurrent core for the Surprise baseline (REFERENCE §4; Denton & Fergus 2018).
+"""SVG-FP, the Surprise baseline's model (REFERENCE §4; Denton & Fergus 2018): its recurrent core
+and the whole model around it.
 
 At step t the frame predictor reads ``[enc(I_{t-1}), z_t]`` and emits the embedding of ``I_t``;
 the posterior LSTM reads ``enc(I_t)``, so ``q(z_t | I_≤t)``; the prior is a fixed N(0, I). The
@@ -7,9 +8,13 @@ encoder and decoder are KEYIN's (:mod:`keyin.models.conv`), sized the same.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import torch
 from torch import Tensor, nn
 
+from keyin.losses.soft_keyframe import gaussian_kl
+from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.recurrent import LSTMBlock
 
 
@@ -59,3 +64,99 @@ class SVGCore(nn.Module):
         inputs = torch.cat([embeddings[:, :-1], z[:, 1:]], dim=-1)  # (B, L-1, E + Z)
         predicted, _ = self.predictor(inputs)
         return torch.tanh(predicted), mu, log_sigma
+
+
+class SVGOutput(NamedTuple):
+    """The teacher-forced pass of :meth:`SVG.forward` over clips of L frames.
+
+    Attributes:
+        logits: (B, L-1, C, H, W) one-step predictions of frames 1 … L-1.
+        mu, log_sigma: (B, L, Z) the posterior of every step.
+        reconstruction: (B, L, C, H, W) logits of every frame decoded from its own embedding, or
+            None when not asked for.
+    """
+
+    logits: Tensor
+    mu: Tensor
+    log_sigma: Tensor
+    reconstruction: Tensor | None
+
+
+class SVG(nn.Module):
+    """SVG-FP: encoder, :class:`SVGCore` and decoder.
+
+    Args:
+        encoder, decoder: KEYIN's; a decoder built with ``skips`` decodes every frame with the
+            encoder features of the clip's last conditioning frame (SVG's skip connections), so the
+            predictor need not carry the static scene.
+        core: the posterior and the frame predictor.
+        n_cond: conditioning frames at the start of every clip.
+    """
+
+    def __init__(self, encoder: ConvEncoder, decoder: ConvDecoder, core: SVGCore, n_cond: int) -> None:
+        super().__init__()
+        self.encoder, self.decoder, self.core = encoder, decoder, core
+        self.n_cond = n_cond
+
+    def encode(self, clips: Tensor) -> tuple[Tensor, list[Tensor] | None]:
+        """(B, L, E) embeddings of (B, L, C, H, W) clips, and the decoder's context: with skips the
+        encoder features of each clip's last conditioning frame (B, F·2^i, h_i, h_i), else None."""
+        if not self.decoder.skips:
+            return self.encoder(clips), None
+        embeddings, skips = self.encoder.embed_with_skips(clips)
+        return embeddings, [features[:, self.n_cond - 1] for features in skips]
+
+    def decode(self, embeddings: Tensor, context: list[Tensor] | None) -> Tensor:
+        """(B, T, C, H, W) logits of (B, T, E) embeddings with the context of :meth:`encode`
+        (its batch B or 1, broadcast over B and T)."""
+        if context is None:
+            return self.decoder(embeddings)
+        batch, steps = embeddings.shape[:2]
+        return self.decoder(embeddings, [features.unsqueeze(1).expand(batch, steps, -1, -1, -1) for features in context])
+
+    def forward(self, clips: Tensor, sample: bool = True, reconstruct: bool = False) -> SVGOutput:
+        """Teacher-forced one-step predictions of (B, L, C, H, W) clips.
+
+        Args:
+            sample: draw z_t from the posterior; False uses its mean.
+            reconstruct: also decode every frame from its own embedding (the auto-encoding term).
+        """
+        embeddings, context = self.encode(clips)
+        predicted, mu, log_sigma = self.core(embeddings, sample=sample)
+        logits = self.decode(predicted, context)
+        return SVGOutput(logits, mu, log_sigma, self.decode(embeddings, context) if reconstruct else None)
+
+    def one_step_video(self, clips: Tensor) -> Tensor:
+        """(B, L, C, H, W) probabilities: frame 0 of (B, L, C, H, W) clips, then the one-step
+        predictions from the posterior mean."""
+        return torch.cat([clips[:, :1], torch.sigmoid(self(clips, sample=False).logits)], dim=1)
+
+    @torch.no_grad()
+    def surprise(self, clips: Tensor) -> Tensor:
+        """(B, L) KL of the posterior to the prior at every step of (B, L, C, H, W) clips (a score
+        for discovery and planning: no gradient)."""
+        return gaussian_kl(*self.core.posterior_stats(self.encoder(clips)))
+
+    def rollout(self, cond_emb: Tensor, z: Tensor) -> Tensor:
+        """The frame predictor rolled out from the prior's latents.
+
+        As in training, step t reads the embedding of frame t - 1 and z_t. The conditioning frames
+        are teacher-forced with their posterior means; after them every step reads its own prediction.
+
+        Args:
+            cond_emb: (1 or n, n_cond, E) embeddings of the conditioning frames.
+            z: (n, T, Z) latents of the T future steps.
+        Returns:
+            (n, T, E) predicted embeddings of the future frames.
+        """
+        predictor, n = self.core.predictor, len(z)
+        cond_z, _ = self.core.posterior_stats(cond_emb)  # (1 or n, n_cond, Z)
+        cond_emb, cond_z = cond_emb.expand(n, -1, -1), cond_z.expand(n, -1, -1)
+        inputs = torch.cat([cond_emb[:, :-1], cond_z[:, 1:]], -1)  # (n, n_cond - 1, E + Z)
+        state = predictor(inputs)[1] if inputs.shape[1] else None
+        previous, predicted = cond_emb[:, -1], []
+        for step in range(z.shape[1]):
+            output, state = predictor.step(torch.cat([previous, z[:, step]], -1), state)
+            previous = torch.tanh(output)
+            predicted.append(previous)
+        return torch.stack(predicted, 1)

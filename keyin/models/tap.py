@@ -58,3 +58,8 @@ class TAPNetwork(nn.Module):
         """
         embeddings = self.encoder(torch.stack([start, goal], dim=1))  # (B, 2, E), one batch through the encoder
         return self.decoder(self.bottleneck(embeddings.flatten(1)))  # (B, 2E) → (B, E) → (B, C, H, W)
+
+    def reconstruct(self, images: Tensor) -> Tensor:
+        """(B, K, C, H, W) logits of (B, K, C, H, W) frames decoded from their own embeddings (the
+        bottleneck skipped: the auto-encoding term)."""
+        return self.decoder(self.encoder(images).flatten(0, 1)).view_as(images)

@@ -20,6 +20,7 @@ import torch
 
 from keyin.decode.surprise import surprise_keyframes
 from keyin.lit.surprise import SurpriseModule
+from keyin.models import SVG
 from keyin.planning.latent_cem import LatentCEMPlanner
 from keyin.planning.trained import conditioning_frames, tensor_to_images
 
@@ -29,45 +30,28 @@ class SurpriseRollouts:
     ``last_only`` the last frame of each rollout, else its M surprise keyframes.
 
     Args:
-        module: a trained :class:`SurpriseModule` in eval mode.
+        model: a trained :class:`keyin.models.SVG` in eval mode.
         start: (H, W, 3) uint8, used as every conditioning frame (pushing has one).
+        n_keyframes: M, the subgoals per rollout.
+        shift: added to a KL peak's future index (:func:`keyin.decode.surprise.surprise_keyframes`).
     """
 
-    def __init__(self, module: SurpriseModule, start: np.ndarray) -> None:
-        self.module = module
-        self.cond_frames = conditioning_frames(start, module.encoder.image_shape, module.hparams.n_cond)
+    def __init__(self, model: SVG, start: np.ndarray, n_keyframes: int, shift: int) -> None:
+        self.model, self.n_keyframes, self.shift = model, n_keyframes, shift
+        self.cond_frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond)
         with torch.no_grad():
-            self.cond_emb, self.context = module.encode(self.cond_frames)  # (1, n_cond, E), skips of the start
-            self.cond_z, _ = module.core.posterior_stats(self.cond_emb)  # (1, n_cond, Zs): posterior means
-
-    @torch.no_grad()
-    def rollout(self, z: torch.Tensor) -> torch.Tensor:
-        """(n, T, E) predicted embeddings of the future frames, given (n, T, Zs) latents.
-
-        As in training, step t reads the embedding of frame t - 1 and z_t. Conditioning frames are
-        teacher-forced with their posterior means; after them every step reads its own prediction.
-        """
-        predictor, n = self.module.core.predictor, len(z)
-        cond_emb, cond_z = self.cond_emb.expand(n, -1, -1), self.cond_z.expand(n, -1, -1)
-        inputs = torch.cat([cond_emb[:, :-1], cond_z[:, 1:]], -1)  # (n, n_cond - 1, E + Zs)
-        state = predictor(inputs)[1] if inputs.shape[1] else None
-        previous, predicted = cond_emb[:, -1], []
-        for step in range(z.shape[1]):
-            output, state = predictor.step(torch.cat([previous, z[:, step]], -1), state)
-            previous = torch.tanh(output)
-            predicted.append(previous)
-        return torch.stack(predicted, 1)
+            self.cond_emb, self.context = model.encode(self.cond_frames)  # (1, n_cond, E), skips of the start
 
     @torch.no_grad()
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
-        embeddings = self.rollout(torch.as_tensor(z, dtype=torch.float32))  # (n, T, E)
+        embeddings = self.model.rollout(self.cond_emb, torch.as_tensor(z, dtype=torch.float32))  # (n, T, E)
         if last_only:
-            return tensor_to_images(torch.sigmoid(self.module.decode(embeddings[:, -1:], self.context)))  # (n, 1, H, W, C)
-        frames = torch.sigmoid(self.module.decode(embeddings, self.context))  # (n, T, C, H, W)
+            return tensor_to_images(torch.sigmoid(self.model.decode(embeddings[:, -1:], self.context)))  # (n, 1, H, W, C)
+        frames = torch.sigmoid(self.model.decode(embeddings, self.context))  # (n, T, C, H, W)
         clips = torch.cat([self.cond_frames.expand(len(frames), -1, -1, -1, -1), frames], 1)
-        kl = self.module.surprise(clips)  # (n, n_cond + T): the inference network on the produced sequence
-        hp = self.module.hparams
-        positions = surprise_keyframes(kl, torch.full((len(frames),), frames.shape[1]), hp.n_cond, hp.n_keyframes, hp.shift)
+        kl = self.model.surprise(clips)  # (n, n_cond + T): the inference network on the produced sequence
+        lengths = torch.full((len(frames),), frames.shape[1])
+        positions = surprise_keyframes(kl, lengths, self.model.n_cond, self.n_keyframes, self.shift)
         return np.stack([tensor_to_images(frames[row, picked]) for row, picked in enumerate(positions)])
 
 
@@ -78,7 +62,7 @@ class SurpriseSubgoals(LatentCEMPlanner):
     stage: ClassVar[str] = "surprise"
 
     def renderer(self, module: SurpriseModule, start: np.ndarray) -> SurpriseRollouts:
-        return SurpriseRollouts(module, start)
+        return SurpriseRollouts(module.model, start, module.hparams.n_keyframes, module.hparams.shift)
 
     def latent_shape(self, module: SurpriseModule) -> tuple[int, int]:
         return module.hparams.n_future, module.hparams.latent_dim

@@ -49,10 +49,10 @@ class TAPSubgoals(TrainedPlanner):
     def __call__(
         self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
     ) -> Subgoals:
-        module = self.module()
-        shape = module.network.encoder.image_shape
+        network = self.module().network  # in eval mode on the CPU
+        shape = network.encoder.image_shape
         subgoals = bisect_subgoals(
-            lambda first, last: module.subgoal(first[None], last[None])[0],  # (C, H, W) in [0, 1]
+            lambda first, last: torch.sigmoid(network(first[None], last[None]))[0],  # (C, H, W) in [0, 1]
             images_to_tensor(start, shape),
             images_to_tensor(goal, shape),
             self.depth,

@@ -1,12 +1,16 @@
 """Checkpoints of keyin 0.1 (no version entry) name KEYIN with our additions ``keyin`` and keep
 stage 2's networks at the top level; they load under today's name, ``keyin_plus``, into today's
-layout, while today's checkpoints keep the name they were saved with."""
+layout, while today's checkpoints keep the name they were saved with. Surprise checkpoints from
+before its SVG model keep its networks at the top level too, and load into today's layout."""
 
+import lightning as L
 import torch
+from torch.utils.data import DataLoader
 
 from keyin import __version__
 from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_trained_module, saved_model_name, upgrade_state_dict
-from tests.planning.trained_models import keyframe_module, save
+from keyin.lit.surprise import SurpriseModule
+from tests.planning.trained_models import SIZE, keyframe_module, save, surprise_module
 
 
 def checkpoint(name: str, version: str | None) -> dict:
@@ -39,4 +43,47 @@ def test_a_keyin_0_1_stage2_checkpoint_loads_into_todays_module(tmp_path):
     assert config["model"]["name"] == "keyin_plus"
     for name, value in today.items():
         torch.testing.assert_close(loaded.state_dict()[name], value, rtol=0, atol=0)
-    assert upgrade_state_dict(today) == today  # today's layout is left as it is
+    assert upgrade_state_dict(today, "keyframes") == today  # today's layout is left as it is
+
+
+def surprise_clips() -> list[dict[str, torch.Tensor]]:
+    """Four clips of 1 + 6 frames for :func:`tests.planning.trained_models.surprise_module`."""
+    frames = torch.rand(4, 7, 3, SIZE, SIZE, generator=torch.Generator().manual_seed(0))
+    keyframes = torch.tensor([False, True, False, False, True, False])
+    return [{"frames": clip, "future_length": torch.tensor(6), "keyframes": keyframes} for clip in frames]
+
+
+def before_the_svg_model(path) -> str:
+    """The Surprise checkpoint at ``path`` rewritten in the layout from before its SVG model:
+    encoder.*, decoder.*, core.* at the top of the LightningModule."""
+    checkpoint = torch.load(path, weights_only=True)
+    checkpoint["state_dict"] = {name.removeprefix("model."): value for name, value in checkpoint["state_dict"].items()}
+    assert any(name.startswith("core.") for name in checkpoint["state_dict"])
+    torch.save(checkpoint, path)
+    return str(path)
+
+
+def test_a_surprise_checkpoint_from_before_the_svg_model_loads_with_the_same_outputs(tmp_path):
+    module = surprise_module(skips=True).eval()
+    loaded, _ = load_trained_module(before_the_svg_model(save(module, tmp_path / "old.ckpt", "surprise")), "surprise")
+    assert set(loaded.state_dict()) == set(module.state_dict())
+    clips = torch.stack([clip["frames"] for clip in surprise_clips()])
+    for output in ("surprise", "one_step_video"):
+        expected = getattr(module.model, output)(clips)
+        torch.testing.assert_close(getattr(loaded.model, output)(clips), expected, rtol=0, atol=0)
+    today = module.state_dict()
+    assert upgrade_state_dict(today, "surprise") == today  # today's layout is left as it is
+
+
+def test_lightning_resumes_a_surprise_checkpoint_from_before_the_svg_model(tmp_path):
+    """``SurpriseModule.on_load_checkpoint`` renames the old layout when Lightning restores it."""
+    trainer = L.Trainer(accelerator="cpu", logger=False, enable_progress_bar=False, enable_model_summary=False)
+    loader = DataLoader(surprise_clips(), batch_size=4)
+    module = surprise_module()
+    (expected,) = trainer.validate(module, loader, verbose=False)
+    trainer.save_checkpoint(tmp_path / "old.ckpt")
+    torch.manual_seed(1)  # other initial weights, replaced by the checkpoint's
+    (restored,) = trainer.validate(
+        SurpriseModule(**module.hparams), loader, ckpt_path=before_the_svg_model(tmp_path / "old.ckpt"), verbose=False
+    )
+    assert restored == expected

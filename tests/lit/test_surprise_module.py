@@ -3,7 +3,8 @@
 import torch
 
 from keyin.decode.surprise import surprise_keyframes
-from keyin.lit.surprise import SurpriseModule, kl_schedule
+from keyin.lit.surprise import SurpriseModule
+from keyin.losses.svg import kl_schedule
 
 
 def module(**overrides) -> SurpriseModule:
@@ -34,7 +35,7 @@ def test_padded_frames_add_nothing_to_the_loss():
 def test_discovery_is_the_peak_picking_of_the_posterior_kl():
     model = module().eval()
     frames, lengths = torch.rand(3, 8, 1, 8, 8), torch.tensor([6, 6, 4])
-    kl = model.surprise(frames)
+    kl = model.model.surprise(frames)
     assert kl.shape == (3, 8) and (kl >= 0).all()
     assert model.discover(frames, lengths) == surprise_keyframes(kl, lengths, 2, 3, shift=-1)
     found = model.discoverers("surprise")["surprise_shift0"](frames, lengths)
@@ -64,7 +65,7 @@ def test_pixel_weights_scale_the_prediction_and_autoencoding_bce():
 
 
 def test_with_skips_every_frame_is_decoded_with_the_last_conditioning_frames_features():
-    model = module(skips=True).eval()
+    model = module(skips=True).eval().model
     frames = torch.rand(2, 8, 1, 8, 8)
     embeddings, context = model.encode(frames)
     _, skips = model.encoder.embed_with_skips(frames)
@@ -78,7 +79,7 @@ def test_with_skips_every_frame_is_decoded_with_the_last_conditioning_frames_fea
     torch.testing.assert_close(model.decode(embeddings, one_context), model.decode(embeddings, [
         features.expand(2, -1, -1, -1) for features in one_context]))
     assert model.decode(embeddings, context).shape == frames.shape
-    assert module(skips=False).encode(frames)[1] is None
+    assert module(skips=False).model.encode(frames)[1] is None
 
 
 def test_with_skips_padded_frames_still_add_nothing_to_the_loss():

@@ -15,16 +15,16 @@ HORIZON, LATENT = 6, 2  # the module's n_future and latent size
 
 
 def rollouts(skips: bool = False) -> SurpriseRollouts:
-    return SurpriseRollouts(surprise_module(skips).eval(), disc_images(np.array([8.0, 8.0]), SIZE))
+    return SurpriseRollouts(surprise_module(skips).eval().model, disc_images(np.array([8.0, 8.0]), SIZE), KEYFRAMES, -1)
 
 
 def test_a_rollout_is_the_predictor_fed_its_own_predictions():
     render = rollouts()
     z = torch.randn(4, HORIZON, LATENT, generator=torch.Generator().manual_seed(0))
-    predicted = render.rollout(z)  # (4, T, E)
+    predicted = render.model.rollout(render.cond_emb, z)  # (4, T, E)
     inputs = torch.cat([render.cond_emb.expand(4, -1, -1), predicted[:, :-1]], 1)  # e_0, ê_1 … ê_{T-1}
     with torch.no_grad():
-        outputs, _ = render.module.core.predictor(torch.cat([inputs, z], -1))
+        outputs, _ = render.model.core.predictor(torch.cat([inputs, z], -1))
     torch.testing.assert_close(predicted, torch.tanh(outputs))
 
 
@@ -34,12 +34,13 @@ def test_the_subgoals_are_the_decoded_frames_at_the_surprise_keyframes_of_the_ro
     z = np.random.default_rng(1).standard_normal((3, HORIZON, LATENT))
     subgoals = render(z, False)
     assert subgoals.shape == (3, KEYFRAMES, SIZE, SIZE, 3) and subgoals.dtype == np.uint8
-    module = render.module
+    model = render.model
     with torch.no_grad():
-        start = images_to_tensor(disc_images(np.array([8.0, 8.0]), SIZE), module.encoder.image_shape)
-        _, context = module.encode(start[None, None])  # with skips: the start frame's encoder features
-        frames = torch.sigmoid(module.decode(render.rollout(torch.as_tensor(z, dtype=torch.float32)), context))
-        kl = module.surprise(torch.cat([start.expand(3, 1, -1, -1, -1), frames], 1))
+        start = images_to_tensor(disc_images(np.array([8.0, 8.0]), SIZE), model.encoder.image_shape)
+        _, context = model.encode(start[None, None])  # with skips: the start frame's encoder features
+        embeddings = model.rollout(render.cond_emb, torch.as_tensor(z, dtype=torch.float32))
+        frames = torch.sigmoid(model.decode(embeddings, context))
+        kl = model.surprise(torch.cat([start.expand(3, 1, -1, -1, -1), frames], 1))
     positions = surprise_keyframes(kl, torch.full((3,), HORIZON), 1, KEYFRAMES, shift=-1)
     for row, picked in enumerate(positions):
         np.testing.assert_array_equal(subgoals[row], tensor_to_images(frames[row, picked]))
