@@ -5,34 +5,17 @@ import torch
 
 from keyin.decode.rules import SegmentationDiscoverer, boundary_keyframes, map_keyframes, with_sequence_ends
 from keyin.decode.segment_costs import interpolation_costs
-from keyin.decode.segmentation import best_segmentation, path_cost, segment_starts_offsets, segmentation_offsets
+from keyin.decode.segmentation import best_segmentation, path_cost, segmentation_offsets
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
-
-
-def brute_force(costs: torch.Tensor, n_keyframes: int, keyframe_cost: float = 0.0) -> tuple[float, list[int]]:
-    """Enumerate every composition of N into at most M parts of at most S, each part priced."""
-    n_future, max_offset = costs.shape
-    best = (float("inf"), [])
-    for m in range(1, n_keyframes + 1):
-        for gaps in itertools.product(range(1, max_offset + 1), repeat=m):
-            if sum(gaps) != n_future:
-                continue
-            boundaries = [0, *itertools.accumulate(gaps)]
-            total = sum(float(costs[a, g - 1]) + keyframe_cost for a, g in zip(boundaries[:-1], gaps))
-            if total < best[0]:
-                best = (total, [k - 1 for k in boundaries[1:-1]])
-    return best
+from tests.decode.enumeration import brute_force, outside_the_clip
 
 
 def test_dp_matches_enumeration():
     torch.manual_seed(0)
     n_future, max_offset, n_keyframes = 9, 4, 4
     costs = torch.rand(5, n_future, max_offset) * 10
-    start, offset = segment_starts_offsets(n_future, max_offset)
-    outside = torch.ones(n_future, max_offset, dtype=torch.bool)
-    outside[start, offset - 1] = False
-    costs[:, outside] = float("inf")
+    costs = outside_the_clip(costs)
     total, positions = best_segmentation(costs, n_keyframes)
     for b in range(5):
         expected_total, expected_positions = brute_force(costs[b], n_keyframes)
@@ -45,10 +28,7 @@ def test_keyframe_cost_prices_every_segment():
     torch.manual_seed(1)
     n_future, max_offset, n_keyframes = 9, 5, 5
     costs = torch.rand(4, n_future, max_offset) * torch.arange(1, max_offset + 1) ** 2  # long gaps cost more
-    start, offset = segment_starts_offsets(n_future, max_offset)
-    outside = torch.ones(n_future, max_offset, dtype=torch.bool)
-    outside[start, offset - 1] = False
-    costs[:, outside] = float("inf")
+    costs = outside_the_clip(costs)
     counts = []
     for keyframe_cost in (0.0, 3.0, 100.0):
         total, positions = best_segmentation(costs, n_keyframes, keyframe_cost)

@@ -1,13 +1,10 @@
 """The label-free price "knee": each clip's number of gaps at the knee of its exact cost curve."""
 
-import itertools
-
 import pytest
 import torch
 
-from keyin.decode.segmentation import KNEE, best_segmentation, knee_counts, path_cost, segment_starts_offsets
-
-INF = float("inf")
+from keyin.decode.segmentation import KNEE, best_segmentation, knee_counts, path_cost
+from tests.decode.enumeration import INF, cheapest_by_count, outside_the_clip
 
 
 def test_the_knee_is_the_count_after_which_the_saving_falls_most():
@@ -25,28 +22,11 @@ def test_a_single_feasible_count_is_taken():
     assert knee_counts(torch.tensor([[INF, INF, INF, 7.0], [INF, INF, 5.0, 4.0]])).tolist() == [3, 3]
 
 
-def cheapest_by_count(costs: torch.Tensor, n_keyframes: int) -> dict[int, tuple[float, list[int]]]:
-    """Enumerate every composition of N into m parts of at most S: the cheapest per m."""
-    n_future, max_offset = costs.shape
-    best: dict[int, tuple[float, list[int]]] = {}
-    for m in range(1, n_keyframes + 1):
-        for gaps in itertools.product(range(1, max_offset + 1), repeat=m):
-            if sum(gaps) == n_future:
-                boundaries = [0, *itertools.accumulate(gaps)]
-                total = sum(float(costs[a, g - 1]) for a, g in zip(boundaries[:-1], gaps))
-                if total < best.get(m, (INF,))[0]:
-                    best[m] = (total, [k - 1 for k in boundaries[1:-1]])
-    return best
-
-
 def test_knee_segmentation_is_the_exact_best_at_the_knee_count():
     torch.manual_seed(3)
     n_future, max_offset, n_keyframes = 9, 4, 5
     costs = torch.rand(6, n_future, max_offset) * 10
-    start, offset = segment_starts_offsets(n_future, max_offset)
-    outside = torch.ones(n_future, max_offset, dtype=torch.bool)
-    outside[start, offset - 1] = False
-    costs[:, outside] = INF
+    costs = outside_the_clip(costs)
     total, positions = best_segmentation(costs, n_keyframes, KNEE)
     for b in range(6):
         by_count = cheapest_by_count(costs[b], n_keyframes)
