@@ -2,6 +2,7 @@
 sizes, and every command of the old layout (tests/reference/old_commands.json, recorded before the
 restructure) builds exactly the same modules under its new name."""
 
+import itertools
 import json
 from pathlib import Path
 
@@ -84,6 +85,7 @@ GROUPS = {
     "train": ("dataset", "backbone", "model", "loss", "trainer", "logger", "scale", "experiment"),
     "eval": ("dataset",),
     "plan": ("planner",),
+    "reproduce": ("table",),
 }
 
 
@@ -95,6 +97,17 @@ GROUPS = {
 def test_every_group_option_composes_and_resolves(root, group, option):
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         resolve(root, [f"{group}={option}"])  # every interpolation has a value
+
+
+@pytest.mark.parametrize("table", options("table"))
+def test_every_job_of_every_table_composes(table):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = compose("reproduce", overrides=[f"table={table}"])
+        root = {"train": "train", "plan": "plan"}[cfg.table.program]
+        for sweep in cfg.table.sweeps:
+            choices = [[f"{key}={value}" for value in values.split(",")] for key, _, values in (o.partition("=") for o in sweep)]
+            for job in itertools.product(*choices):
+                resolve(root, list(job))
 
 
 @pytest.mark.parametrize("experiment", options("experiment"))

@@ -6,10 +6,12 @@ Untrained baselines (Random, Constant) are only scored, so one sweep covers ever
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Callable
 
 import lightning as L
+import torch
 from lightning.pytorch.loggers import Logger
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
@@ -90,7 +92,7 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         config=OmegaConf.to_container(cfg, resolve=True),
         compile_networks=cfg.compile,
     )
-    module = None
+    module, started = None, time.perf_counter()
     if not cfg.model.trainable:
         discoverers = {cfg.model.name: instantiate(cfg.model.discoverer)}
     elif "module" in cfg.model:  # one stage (Surprise, TAP)
@@ -101,18 +103,16 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         discoverers = train_two_stages(cfg, datamodule, common, folder)
     if not cfg.evaluate:
         return None
+    # wall times of this process (a resumed job counts its last part only), on torch's threads
+    times = {"train_seconds": round(time.perf_counter() - started, 1), "threads": torch.get_num_threads()}
+    started = time.perf_counter()
     if discoverers:
-        return evaluate_all(discoverers, clips("test", scale.eval_clips), cfg, folder)
-    if hasattr(module, "test_metrics"):  # a model without keyframes scores itself (TAP)
-        metrics = module.test_metrics(clips("test", scale.eval_clips), folder)
-        return record_metrics(dict(metrics, method=cfg.model.name), cfg, folder)
-    return None
-
-
-def evaluate_all(discoverers: Discoverers, test_clips, cfg: DictConfig, folder: Path) -> dict:
-    """Score every discoverer on the test clips and write metrics.json."""
-    dataset = cfg.dataset
-    return record_metrics(score_methods(discoverers, test_clips, dataset.n_cond, dataset.n_future, folder), cfg, folder)
+        metrics = score_methods(discoverers, clips("test", scale.eval_clips), dataset.n_cond, dataset.n_future, folder)
+    elif hasattr(module, "test_metrics"):  # a model without keyframes scores itself (TAP)
+        metrics = dict(module.test_metrics(clips("test", scale.eval_clips), folder), method=cfg.model.name)
+    else:
+        return None
+    return record_metrics(dict(metrics, **times, score_seconds=round(time.perf_counter() - started, 1)), cfg, folder)
 
 
 def record_metrics(metrics: dict, cfg: DictConfig, folder: Path) -> dict:

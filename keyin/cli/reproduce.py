@@ -1,0 +1,103 @@
+"""keyin-reproduce table=<name>: data, every job, their small files and the report of one committed table.
+
+The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
+(each a ``keyin-train -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
+folder they write to. Each job's ``metrics.json``, its composed ``config.yaml`` and the SHA-256 of its
+checkpoints (``checkpoints.json``) are copied to ``<out>/jobs/<job>/``, so the report, built from those
+files by ``keyin-report``, can be rebuilt after the run folders are gone.
+"""
+
+from __future__ import annotations
+
+import json
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+from omegaconf import DictConfig, OmegaConf
+
+from keyin.cli import report
+from keyin.cli.app import keyin_main, user_errors
+from keyin.errors import ConfigError, KeyinError
+from keyin.io import atomic_write_text, sha256_of
+
+STEPS = ("data", "jobs", "collect", "report")
+PROGRAMS = {"train": "keyin.cli.train", "plan": "keyin.cli.plan"}
+SMALL_FILES = ("metrics.json", "predictions.json", "tasks.jsonl")  # copied as they are; the config comes from .hydra/
+
+
+def commands(cfg: DictConfig) -> list[list[str]]:
+    """The keyin-generate and sweep calls of the chosen steps, in order."""
+    table, calls = cfg.table, []
+    if "data" in cfg.steps:
+        for entry in table.data:
+            splits = json.dumps(OmegaConf.to_container(entry.splits)).replace('"', "")
+            calls.append(["keyin.cli.generate", f"dataset={entry.dataset}", f"splits={splits}", f"data_dir={cfg.data_dir}"])
+    if "jobs" in cfg.steps:
+        for overrides in table.sweeps:
+            calls.append([PROGRAMS[table.program], "-m", *overrides, f"data_dir={cfg.data_dir}"])
+    return calls
+
+
+def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
+    """Copy every job's small files from ``sweep_dir`` to ``jobs_dir/<job>/``; returns the jobs copied.
+
+    A job is a folder with a ``metrics.json``; a folder with checkpoints only (a stage 1 shared by
+    several jobs) keeps its ``checkpoints.json``, so every trained network of the table is named by hash.
+    """
+    copied = []
+    for folder in sorted(path for path in sweep_dir.iterdir() if path.is_dir()):
+        checkpoints = sorted(folder.glob("checkpoints/**/*.ckpt"))
+        if not (folder / "metrics.json").is_file() and not checkpoints:
+            continue
+        target = jobs_dir / folder.name
+        target.mkdir(parents=True, exist_ok=True)
+        for name in SMALL_FILES:
+            if (folder / name).is_file():
+                atomic_write_text(target / name, (folder / name).read_text())
+        if (folder / ".hydra" / "config.yaml").is_file():
+            atomic_write_text(target / "config.yaml", (folder / ".hydra" / "config.yaml").read_text())
+        hashes = {str(path.relative_to(folder)): sha256_of(path) for path in checkpoints}
+        atomic_write_text(target / "checkpoints.json", json.dumps(hashes, indent=1, sort_keys=True) + "\n")
+        copied.append(folder.name)
+    return copied
+
+
+def check_table(cfg: DictConfig) -> None:
+    unknown = [step for step in cfg.steps if step not in STEPS]
+    if unknown:
+        raise ConfigError(f"steps={list(cfg.steps)}: {unknown} are not steps; use any of {list(STEPS)}")
+    if cfg.table.program not in PROGRAMS:
+        raise ConfigError(f"table.program={cfg.table.program!r} must be one of {sorted(PROGRAMS)}")
+
+
+@user_errors
+def reproduce(cfg: DictConfig) -> list[str]:
+    check_table(cfg)
+    for call in commands(cfg):
+        print("+ python -m " + shlex.join(call), flush=True)
+        if not cfg.dry_run and subprocess.run([sys.executable, "-m", *call]).returncode != 0:
+            raise KeyinError(
+                f"python -m {shlex.join(call)} failed (its output is above); fix it and run keyin-reproduce again: "
+                "finished jobs are skipped"
+            )
+    out, sweep_dir = Path(cfg.out), Path(cfg.table.sweep_dir)
+    copied: list[str] = []
+    if "collect" in cfg.steps and not cfg.dry_run:
+        if not sweep_dir.is_dir():
+            raise ConfigError(f"table.sweep_dir={sweep_dir} does not exist: run the jobs first (steps=[jobs])")
+        copied = collect(sweep_dir, out / "jobs")
+        print(f"copied the small files of {len(copied)} folders to {out / 'jobs'}")
+    if "report" in cfg.steps and not cfg.dry_run:
+        report.main([str(out / "jobs"), "--out", str(out), *cfg.table.report])
+    return copied
+
+
+@keyin_main("reproduce")
+def main(cfg: DictConfig) -> None:
+    reproduce(cfg)
+
+
+if __name__ == "__main__":
+    main()

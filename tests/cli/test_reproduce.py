@@ -1,0 +1,47 @@
+"""keyin-reproduce: a table from nothing (data, jobs, their small files, the report) in one command."""
+
+import json
+
+from tests.cli.runner import run
+
+TINY_TABLE = (
+    "table=brownian_table1",
+    "table.data=[{dataset: brownian, splits: {test: 12}}]",
+    'table.sweeps=[["experiment=brownian_table1","model=random,constant","seed=0","scale=smoke","scale.eval_clips=12"]]',
+    "out=results",
+)
+
+
+def test_one_command_writes_every_jobs_small_files_and_the_report(tmp_path):
+    result = run("reproduce", *TINY_TABLE, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    jobs = tmp_path / "results" / "jobs"
+    assert sorted(path.name for path in jobs.iterdir()) == ["constant_seed0", "random_seed0"]
+    for job in jobs.iterdir():
+        metrics = json.loads((job / "metrics.json").read_text())
+        assert metrics["method"] == job.name.removesuffix("_seed0") and metrics["n_sequences"] == 12
+        assert metrics["train_seconds"] >= 0 and metrics["score_seconds"] > 0
+        assert "model:" in (job / "config.yaml").read_text()  # the job's composed config
+        assert json.loads((job / "checkpoints.json").read_text()) == {}  # untrained rows have no checkpoint
+    table = (tmp_path / "results" / "table1.md").read_text()
+    assert "| brownian | random |" in table and "| brownian | constant |" in table
+    # the report is rebuilt from the copied files alone, after the run folders are gone
+    (tmp_path / "runs").rename(tmp_path / "gone")
+    again = run("reproduce", *TINY_TABLE, "steps=[report]", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "results" / "table1.md").read_text().split("\n")[3:] == table.split("\n")[3:]
+
+
+def test_a_dry_run_prints_the_commands_and_runs_none(tmp_path):
+    result = run("reproduce", *TINY_TABLE, "dry_run=true", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "+ python -m keyin.cli.generate dataset=brownian 'splits={test: 12}' data_dir=data" in result.stdout
+    assert "+ python -m keyin.cli.train -m experiment=brownian_table1 model=random,constant seed=0" in result.stdout
+    assert not (tmp_path / "data").exists() and not (tmp_path / "results").exists()
+
+
+def test_an_unknown_step_and_a_missing_sweep_folder_name_the_fix(tmp_path):
+    bad = run("reproduce", "table=brownian_table1", "steps=[data,train]", cwd=tmp_path)
+    assert bad.returncode == 2 and "['train'] are not steps; use any of ['data', 'jobs', 'collect', 'report']" in bad.stderr
+    missing = run("reproduce", "table=brownian_table1", "steps=[collect]", cwd=tmp_path)
+    assert missing.returncode == 2 and "does not exist: run the jobs first (steps=[jobs])" in missing.stderr
