@@ -17,6 +17,9 @@ from keyin.models.recurrent import LSTMBlock, init_forget_bias
 
 OFFSET_MODES = ("predicted", "static", "fixed")
 MODES = ("posterior", "prior")
+# How keyframe t's offset evidence places keyframe t - 1: "soft" at D^{t-1} (the soft loss's
+# expected position, training), "argmax" where the argmax offsets put it (the readout's own chain).
+CHAINS = ("soft", "argmax")
 # Logit of the impossible offsets in "fixed" mode: softmax gives an exact one-hot, and unlike −∞ it
 # keeps log-softmax and entropy (0 · log 0) finite.
 FIXED_OFFSET_OFF_LOGIT = -1.0e4
@@ -188,7 +191,7 @@ class KeyframePredictor(nn.Module):
         logits[self.fixed_offset - 1] = 0.0
         return logits.expand(batch_size, self.n_keyframes, -1)
 
-    def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor) -> Tensor:
+    def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor, chain: str = "soft") -> Tensor:
         """Offset logits plus the log-probability that offset a + 1 reaches the *first* boundary.
 
         With ``p[j] = σ(s[j])`` the boundary probability at extended index j, keyframe t after a
@@ -200,6 +203,8 @@ class KeyframePredictor(nn.Module):
         Args:
             offset_logits: (B, M, S) from the offset head.
             scores: (B, N) per-frame boundary logits; mask: (B, N) valid frames.
+            chain: "soft" (the previous keyframe at ``D^{t-1}``) or "argmax" (at the position of
+                the argmax offsets so far, one-hot: what the argmax readout reads).
         Returns:
             (B, M, S) logits; keyframe t's depend on δ^1…δ^{t-1} through ``D^{t-1}``.
         """
@@ -218,7 +223,10 @@ class KeyframePredictor(nn.Module):
             skipped_before = (previous_pos * none_through).sum(-1, keepdim=True)  # (B, 1)
             evidence = torch.einsum("bak,bk->ba", shifted, first_at) - skipped_before  # (B, S)
             logit = offset_logits[:, t] + evidence  # (B, S)
-            previous_pos = torch.einsum("bak,ba->bk", shifted, torch.softmax(logit, dim=-1))  # D^t
+            if chain == "argmax":
+                previous_pos = shifted[torch.arange(batch), logit.argmax(-1)]  # one-hot at the argmax path
+            else:
+                previous_pos = torch.einsum("bak,ba->bk", shifted, torch.softmax(logit, dim=-1))  # D^t
             logits.append(logit)
         return torch.stack(logits, dim=1)
 
@@ -230,6 +238,7 @@ class KeyframePredictor(nn.Module):
         mode: str = "posterior",
         sample: bool = True,
         z: Tensor | None = None,
+        chain: str = "soft",
     ) -> KeyframeOutput:
         """Predict the keyframes.
 
@@ -240,11 +249,15 @@ class KeyframePredictor(nn.Module):
             mode: "posterior" (z^t from the attention posterior, training) or "prior" (z^t ~ N(0, I)).
             sample: draw z^t; False uses the mean (μ^t in posterior mode, 0 in prior mode).
             z: (B, M, Zk) latents to use in prior mode (the CEM planner's), overriding `sample`.
+            chain: where the offset evidence places each previous keyframe (:data:`CHAINS`; no
+                effect without ``offset_evidence``).
         Returns:
             KeyframeOutput.
         """
         if mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+        if chain not in CHAINS:
+            raise ValueError(f"chain must be one of {CHAINS}, got {chain!r}")
         if mode == "posterior" and future_emb is None:
             raise ValueError("posterior mode needs future_emb")
         if mode == "posterior" and z is not None:
@@ -288,7 +301,7 @@ class KeyframePredictor(nn.Module):
 
         offset_logits = self._offset_logits(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
         if boundary_scores is not None:
-            offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask)
+            offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask, chain)
         return KeyframeOutput(
             key_emb=torch.stack(key_embs, dim=1),  # (B, M, E)
             offset_probs=torch.softmax(offset_logits, dim=-1),  # (B, M, S)

@@ -52,15 +52,15 @@ class KEYIN(nn.Module):
             getattr(self, name).requires_grad_(False).eval()
 
     def keyframes(
-        self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True
+        self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True, chain: str = "soft"
     ) -> tuple[Tensor, KeyframeOutput]:
         """The clips' embeddings (B, L, E) and the keyframe predictor's output, without interpolating.
 
-        Args: as :meth:`forward`.
+        Args: as :meth:`forward`; ``chain`` as :meth:`KeyframePredictor.forward` (the readout's "argmax").
         """
         embeddings = self.encoder(clips)  # (B, L, E)
         cond_emb, future_emb = embeddings[:, : self.n_cond], embeddings[:, self.n_cond :]
-        return embeddings, self.predictor(cond_emb, future_emb, future_length, mode=mode, sample=sample)
+        return embeddings, self.predictor(cond_emb, future_emb, future_length, mode=mode, sample=sample, chain=chain)
 
     def forward(
         self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True

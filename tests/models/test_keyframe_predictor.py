@@ -281,6 +281,28 @@ def test_boundary_evidence_is_the_first_boundary_log_probability():
     torch.testing.assert_close(logits[0, 0].double(), expected, rtol=1e-5, atol=1e-5)
 
 
+def test_the_argmax_chain_places_each_previous_keyframe_where_the_argmax_offsets_put_it():
+    torch.manual_seed(2)
+    predictor = make_predictor(offset_evidence=True)
+    n_future = 2 * MAX_OFFSET
+    scores, base = torch.randn(1, n_future) * 2, torch.randn(1, KEYFRAMES, MAX_OFFSET)
+    mask = torch.ones(1, n_future, dtype=torch.bool)
+    with torch.no_grad():
+        predictor.beyond_score.fill_(-1.5)
+        logits = predictor._add_boundary_evidence(base, scores, mask, chain="argmax")
+        soft = predictor._add_boundary_evidence(base, scores, mask, chain="soft")
+    extended = [-1.5] + scores[0].tolist() + [-1.5] * (KEYFRAMES * MAX_OFFSET - n_future)
+    previous = 0  # extended index of K^0
+    for t in range(KEYFRAMES):
+        expected = base[0, t].double() + first_boundary_log_probs(extended, previous, MAX_OFFSET)
+        torch.testing.assert_close(logits[0, t].double(), expected, rtol=1e-5, atol=1e-5)
+        previous += int(logits[0, t].argmax()) + 1
+    torch.testing.assert_close(soft[0, 0], logits[0, 0])  # the first keyframe starts at K^0 either way
+    assert not torch.allclose(soft[0, 1:], logits[0, 1:])
+    with pytest.raises(ValueError, match="chain must be one of"):
+        predictor(*make_embeddings(), chain="beam")
+
+
 def test_boundary_evidence_does_not_skip_a_boundary_for_a_higher_later_score():
     predictor = make_predictor(offset_evidence=True)
     scores = torch.full((1, 2 * MAX_OFFSET), -20.0)
