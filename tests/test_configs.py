@@ -43,17 +43,21 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
     return overrides
 
 
+# Options added since keyin 0.1, at the default that does what 0.1 did: module → {key: value}.
+ADDED_SINCE = {"keyframes": {"teacher_chain": False}}
 # Classes that moved since keyin 0.1, old path → new path.
 MOVED_TARGETS = {f"keyin.eval.baselines.{name}": f"keyin.decode.baselines.{name}" for name in ("RandomKeyframes", "ConstantKeyframes")}
 
 
 def module_arguments(model: dict) -> dict:
     """The constructor arguments of each module a model config builds (its name aside), classes
-    named where they live now."""
-    return {
-        key: {**value, "_target_": MOVED_TARGETS.get(value["_target_"], value["_target_"])} if isinstance(value, dict) else value
-        for key, value in model.items() if key != "name"
-    }
+    named where they live now, options added since at keyin 0.1's behaviour left out."""
+    def today(key: str, value: dict) -> dict:
+        added = ADDED_SINCE.get(key, {})
+        kept = {k: v for k, v in value.items() if k not in added or v != added[k]}
+        return {**kept, "_target_": MOVED_TARGETS.get(value["_target_"], value["_target_"])}
+
+    return {key: today(key, value) if isinstance(value, dict) else value for key, value in model.items() if key != "name"}
 
 
 @pytest.mark.parametrize("command", sorted(OLD_COMMANDS))

@@ -15,6 +15,7 @@ from torch import Tensor
 from keyin.decode.segment_costs import embedding_costs
 from keyin.decode.segmentation import decode_by_length, segmentation_offsets
 from keyin.losses.soft_keyframe import boundary_teacher_loss, offset_teacher_loss
+from keyin.models.keyin import KEYIN
 
 
 @torch.no_grad()
@@ -46,25 +47,33 @@ def segmentation_targets(
 
 
 def teacher_loss(
-    interpolator: torch.nn.Module, out: dict[str, Tensor | None], future_length: Tensor, n_keyframes: int,
-    keyframe_cost: float = 0.0, n_clips: int = 0,
+    model: KEYIN, clips: Tensor, out: dict[str, Tensor | None], future_length: Tensor,
+    keyframe_cost: float = 0.0, n_clips: int = 0, chained: bool = False,
 ) -> Tensor:
     """Cross-entropy of δ (and, where the model has boundary scores, of those) to the
     :func:`segmentation_targets` of the first ``n_clips`` clips (0: all).
 
     Args:
+        model: the KEYIN model whose frozen interpolator segments the clips.
+        clips: (B, L, C, H, W) the clips of ``out``.
         out: a :meth:`keyin.models.KEYIN.forward` of the clips (``boundary_emb``, ``offset_logits``,
             ``boundary_scores``).
         future_length: (B,) valid future frames.
+        chained: teacher forcing: δ's offset evidence places each previous keyframe at the
+            teacher's position (the model run again on those clips with ``chain`` = the teacher's
+            offsets), as the argmax readout places it at its own; False: δ as in ``out``.
     Returns:
         () the loss.
     """
     n_clips = n_clips or out["boundary_emb"].shape[0]
     lengths = future_length[:n_clips]
     offsets, boundaries = segmentation_targets(
-        interpolator, out["boundary_emb"][:n_clips].detach(), lengths, n_keyframes, keyframe_cost
+        model.interpolator, out["boundary_emb"][:n_clips].detach(), lengths, model.predictor.n_keyframes, keyframe_cost
     )
-    loss = offset_teacher_loss(out["offset_logits"][:n_clips], offsets)
+    logits = out["offset_logits"][:n_clips]
+    if chained:
+        logits = model.keyframes(clips[:n_clips], lengths, chain=offsets)[1].offset_logits
+    loss = offset_teacher_loss(logits, offsets)
     if out["boundary_scores"] is not None:
         loss = loss + boundary_teacher_loss(out["boundary_scores"][:n_clips], boundaries, lengths)
     return loss

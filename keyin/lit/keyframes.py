@@ -52,6 +52,7 @@ class KeyframeModule(L.LightningModule):
         offset_evidence: bool = False,
         discovery: str = "offsets",
         teacher_keyframe_cost: float = 0.0,
+        teacher_chain: bool = False,  # teacher forcing of the previous keyframe's position (decode/teacher.py)
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
     ) -> None:
@@ -106,7 +107,7 @@ class KeyframeModule(L.LightningModule):
         )
         if stage == "train" and hp.teacher_weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
             terms["teacher"] = teacher_loss(
-                self.model.interpolator, out, future_length, hp.n_keyframes, hp.teacher_keyframe_cost, hp.teacher_clips
+                self.model, clips, out, future_length, hp.teacher_keyframe_cost, hp.teacher_clips, hp.teacher_chain
             )
             terms["loss"] = terms["loss"] + hp.teacher_weight * terms["teacher"]
             self.log("train/teacher", terms["teacher"])

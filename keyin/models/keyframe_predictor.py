@@ -18,8 +18,10 @@ from keyin.models.recurrent import LSTMBlock, init_forget_bias
 OFFSET_MODES = ("predicted", "static", "fixed")
 MODES = ("posterior", "prior")
 # How keyframe t's offset evidence places keyframe t - 1: "soft" at D^{t-1} (the soft loss's
-# expected position, training), "argmax" where the argmax offsets put it (the readout's own chain).
+# expected position, training), "argmax" where the argmax offsets put it (the readout's own chain);
+# or (B, M) given offsets (a teacher's: teacher forcing of the previous keyframe's position).
 CHAINS = ("soft", "argmax")
+Chain = str | Tensor
 # Logit of the impossible offsets in "fixed" mode: softmax gives an exact one-hot, and unlike −∞ it
 # keeps log-softmax and entropy (0 · log 0) finite.
 FIXED_OFFSET_OFF_LOGIT = -1.0e4
@@ -191,7 +193,7 @@ class KeyframePredictor(nn.Module):
         logits[self.fixed_offset - 1] = 0.0
         return logits.expand(batch_size, self.n_keyframes, -1)
 
-    def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor, chain: str = "soft") -> Tensor:
+    def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor, chain: Chain = "soft") -> Tensor:
         """Offset logits plus the log-probability that offset a + 1 reaches the *first* boundary.
 
         With ``p[j] = σ(s[j])`` the boundary probability at extended index j, keyframe t after a
@@ -203,8 +205,9 @@ class KeyframePredictor(nn.Module):
         Args:
             offset_logits: (B, M, S) from the offset head.
             scores: (B, N) per-frame boundary logits; mask: (B, N) valid frames.
-            chain: "soft" (the previous keyframe at ``D^{t-1}``) or "argmax" (at the position of
-                the argmax offsets so far, one-hot: what the argmax readout reads).
+            chain: "soft" (the previous keyframe at ``D^{t-1}``), "argmax" (at the position of
+                the argmax offsets so far, one-hot: what the argmax readout reads), or (B, M)
+                offsets in 1…S (values < 1, a teacher's "no keyframe", count as 1) whose sums place it.
         Returns:
             (B, M, S) logits; keyframe t's depend on δ^1…δ^{t-1} through ``D^{t-1}``.
         """
@@ -223,7 +226,9 @@ class KeyframePredictor(nn.Module):
             skipped_before = (previous_pos * none_through).sum(-1, keepdim=True)  # (B, 1)
             evidence = torch.einsum("bak,bk->ba", shifted, first_at) - skipped_before  # (B, S)
             logit = offset_logits[:, t] + evidence  # (B, S)
-            if chain == "argmax":
+            if isinstance(chain, Tensor):
+                previous_pos = shifted[torch.arange(batch), chain[:, t].clamp(1, max_offset) - 1]  # one-hot, given path
+            elif chain == "argmax":
                 previous_pos = shifted[torch.arange(batch), logit.argmax(-1)]  # one-hot at the argmax path
             else:
                 previous_pos = torch.einsum("bak,ba->bk", shifted, torch.softmax(logit, dim=-1))  # D^t
@@ -238,7 +243,7 @@ class KeyframePredictor(nn.Module):
         mode: str = "posterior",
         sample: bool = True,
         z: Tensor | None = None,
-        chain: str = "soft",
+        chain: Chain = "soft",
     ) -> KeyframeOutput:
         """Predict the keyframes.
 
@@ -256,8 +261,11 @@ class KeyframePredictor(nn.Module):
         """
         if mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-        if chain not in CHAINS:
-            raise ValueError(f"chain must be one of {CHAINS}, got {chain!r}")
+        if isinstance(chain, Tensor):
+            if tuple(chain.shape) != (cond_emb.shape[0], self.n_keyframes):
+                raise ValueError(f"given offsets must have shape (B, M) = ({cond_emb.shape[0]}, {self.n_keyframes}), got {tuple(chain.shape)}")
+        elif chain not in CHAINS:
+            raise ValueError(f"chain must be one of {CHAINS} or (B, M) offsets, got {chain!r}")
         if mode == "posterior" and future_emb is None:
             raise ValueError("posterior mode needs future_emb")
         if mode == "posterior" and z is not None:

@@ -14,7 +14,7 @@ from torch import Tensor, nn
 from keyin.losses.soft_keyframe import argmax_frames
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
-from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
+from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
 
@@ -52,7 +52,7 @@ class KEYIN(nn.Module):
             getattr(self, name).requires_grad_(False).eval()
 
     def keyframes(
-        self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True, chain: str = "soft"
+        self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True, chain: Chain = "soft"
     ) -> tuple[Tensor, KeyframeOutput]:
         """The clips' embeddings (B, L, E) and the keyframe predictor's output, without interpolating.
 

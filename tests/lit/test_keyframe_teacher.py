@@ -12,7 +12,8 @@ STAGE1 = dict(
 
 
 def keyframe_module(
-    teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets", **sizes: int
+    teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets", teacher_chain: bool = False,
+    **sizes: int,
 ) -> KeyframeModule:
     """A small stage-2 module; ``sizes`` override STAGE1's (e.g. image_size, channels)."""
     torch.manual_seed(0)
@@ -21,7 +22,7 @@ def keyframe_module(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,
-        offset_evidence=offset_evidence, discovery=discovery,
+        offset_evidence=offset_evidence, discovery=discovery, teacher_chain=teacher_chain,
     )
     module.log = module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     return module
@@ -80,3 +81,25 @@ def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored(
     assert list(keyframe_module(0.0).discoverers("jumpy")) == ["jumpy"]
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(0.0, discovery="boundaries")
+
+
+def test_the_chained_teacher_scores_delta_read_along_the_teachers_own_path():
+    from keyin.decode.teacher import segmentation_targets
+    from keyin.losses.soft_keyframe import boundary_teacher_loss, offset_teacher_loss
+
+    module = keyframe_module(10.0, offset_evidence=True, teacher_chain=True)
+    data = batch()
+    clips, lengths = data["frames"], data["future_length"]
+    torch.manual_seed(5)
+    terms = module._shared_step(data, "train")
+    torch.manual_seed(5)  # the same posterior samples, then the teacher's targets and δ on its path
+    out = module.model(clips, lengths)
+    offsets, boundaries = segmentation_targets(module.model.interpolator, out["boundary_emb"][:2], lengths[:2], 3)
+    chained = module.model.keyframes(clips[:2], lengths[:2], chain=offsets)[1]
+    expected = offset_teacher_loss(chained.offset_logits, offsets) + boundary_teacher_loss(
+        out["boundary_scores"][:2], boundaries, lengths[:2]
+    )
+    assert torch.isclose(terms["teacher"], expected)
+    unchained = keyframe_module(10.0, offset_evidence=True)
+    torch.manual_seed(5)
+    assert not torch.isclose(unchained._shared_step(data, "train")["teacher"], expected)

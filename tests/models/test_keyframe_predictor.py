@@ -297,6 +297,9 @@ def test_the_argmax_chain_places_each_previous_keyframe_where_the_argmax_offsets
         expected = base[0, t].double() + first_boundary_log_probs(extended, previous, MAX_OFFSET)
         torch.testing.assert_close(logits[0, t].double(), expected, rtol=1e-5, atol=1e-5)
         previous += int(logits[0, t].argmax()) + 1
+    with torch.no_grad():  # the same path given as offsets (a teacher's) gives the same logits
+        given = predictor._add_boundary_evidence(base, scores, mask, chain=logits.argmax(-1) + 1)
+    torch.testing.assert_close(given, logits)
     torch.testing.assert_close(soft[0, 0], logits[0, 0])  # the first keyframe starts at K^0 either way
     assert not torch.allclose(soft[0, 1:], logits[0, 1:])
     with pytest.raises(ValueError, match="chain must be one of"):
