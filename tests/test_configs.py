@@ -107,11 +107,11 @@ def test_every_group_option_composes_and_resolves(root, group, option):
 def test_every_job_of_every_table_composes(table):
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         cfg = compose("reproduce", overrides=[f"table={table}"])
-        root = {"train": "train", "plan": "plan"}[cfg.table.program]
         for sweep in cfg.table.sweeps:
-            choices = [[f"{key}={value}" for value in values.split(",")] for key, _, values in (o.partition("=") for o in sweep)]
+            split = (override.partition("=") for override in sweep.overrides if not override.startswith("hydra."))
+            choices = [[f"{key}={value}" for value in values.split(",")] for key, _, values in split]
             for job in itertools.product(*choices):
-                resolve(root, list(job))
+                resolve(sweep.program, list(job))
 
 
 @pytest.mark.parametrize("experiment", options("experiment"))

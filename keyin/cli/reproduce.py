@@ -2,9 +2,10 @@
 
 The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
 (each a ``keyin-train -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
-folder they write to. Each job's ``metrics.json``, its composed ``config.yaml`` and the SHA-256 of its
-checkpoints (``checkpoints.json``) are copied to ``<out>/jobs/<job>/``, so the report, built from those
-files by ``keyin-report``, can be rebuilt after the run folders are gone.
+folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``),
+its composed ``config.yaml`` and the SHA-256 of every checkpoint it wrote or read (``checkpoints.json``)
+are copied to ``<out>/jobs/<job>/``, so the report, built from those files by ``keyin-report``, can be
+rebuilt after the run folders are gone.
 """
 
 from __future__ import annotations
@@ -35,8 +36,8 @@ def commands(cfg: DictConfig) -> list[list[str]]:
             splits = json.dumps(OmegaConf.to_container(entry.splits)).replace('"', "")
             calls.append(["keyin.cli.generate", f"dataset={entry.dataset}", f"splits={splits}", f"data_dir={cfg.data_dir}"])
     if "jobs" in cfg.steps:
-        for overrides in table.sweeps:
-            calls.append([PROGRAMS[table.program], "-m", *overrides, f"data_dir={cfg.data_dir}"])
+        for sweep in table.sweeps:
+            calls.append([PROGRAMS[sweep.program], "-m", *sweep.overrides, f"data_dir={cfg.data_dir}"])
     return calls
 
 
@@ -48,7 +49,7 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
     """
     copied = []
     for folder in sorted(path for path in sweep_dir.iterdir() if path.is_dir()):
-        checkpoints = sorted(folder.glob("checkpoints/**/*.ckpt"))
+        checkpoints = sorted(folder.glob("checkpoints/**/*.ckpt")) + read_checkpoints(folder / ".hydra" / "config.yaml")
         if not (folder / "metrics.json").is_file() and not checkpoints:
             continue
         target = jobs_dir / folder.name
@@ -58,18 +59,40 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
                 atomic_write_text(target / name, (folder / name).read_text())
         if (folder / ".hydra" / "config.yaml").is_file():
             atomic_write_text(target / "config.yaml", (folder / ".hydra" / "config.yaml").read_text())
-        hashes = {str(path.relative_to(folder)): sha256_of(path) for path in checkpoints}
+        hashes = {str(path.relative_to(folder) if path.is_relative_to(folder) else path): sha256_of(path) for path in checkpoints}
         atomic_write_text(target / "checkpoints.json", json.dumps(hashes, indent=1, sort_keys=True) + "\n")
         copied.append(folder.name)
     return copied
+
+
+def read_checkpoints(config_file: Path) -> list[Path]:
+    """The checkpoint files a job's composed config names (a planner's, a stage 1's) that exist."""
+    if not config_file.is_file():
+        return []
+    values = OmegaConf.to_container(OmegaConf.load(config_file), resolve=False)
+    found: list[Path] = []
+
+    def visit(value: object) -> None:
+        if isinstance(value, dict):
+            for item in value.values():
+                visit(item)
+        elif isinstance(value, list):
+            for item in value:
+                visit(item)
+        elif isinstance(value, str) and value.endswith(".ckpt") and Path(value).is_file():
+            found.append(Path(value))
+
+    visit(values)
+    return sorted(set(found))
 
 
 def check_table(cfg: DictConfig) -> None:
     unknown = [step for step in cfg.steps if step not in STEPS]
     if unknown:
         raise ConfigError(f"steps={list(cfg.steps)}: {unknown} are not steps; use any of {list(STEPS)}")
-    if cfg.table.program not in PROGRAMS:
-        raise ConfigError(f"table.program={cfg.table.program!r} must be one of {sorted(PROGRAMS)}")
+    for index, sweep in enumerate(cfg.table.sweeps):
+        if sweep.program not in PROGRAMS:
+            raise ConfigError(f"table.sweeps[{index}].program={sweep.program!r} must be one of {sorted(PROGRAMS)}")
 
 
 @user_errors

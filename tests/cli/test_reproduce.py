@@ -7,7 +7,8 @@ from tests.cli.runner import run
 TINY_TABLE = (
     "table=brownian_table1",
     "table.data=[{dataset: brownian, splits: {test: 12}}]",
-    'table.sweeps=[["experiment=brownian_table1","model=random,constant","seed=0","scale=smoke","scale.eval_clips=12"]]',
+    'table.sweeps=[{program: train, overrides: ["experiment=brownian_table1","model=random,constant","seed=0",'
+    '"scale=smoke","scale.eval_clips=12"]}]',
     "out=results",
 )
 
@@ -40,8 +41,29 @@ def test_a_dry_run_prints_the_commands_and_runs_none(tmp_path):
     assert not (tmp_path / "data").exists() and not (tmp_path / "results").exists()
 
 
-def test_an_unknown_step_and_a_missing_sweep_folder_name_the_fix(tmp_path):
+def test_an_unknown_step_or_program_and_a_missing_sweep_folder_name_the_fix(tmp_path):
     bad = run("reproduce", "table=brownian_table1", "steps=[data,train]", cwd=tmp_path)
     assert bad.returncode == 2 and "['train'] are not steps; use any of ['data', 'jobs', 'collect', 'report']" in bad.stderr
+    program = run("reproduce", "table=brownian_table1", "table.sweeps.0.program=fit", cwd=tmp_path)
+    assert program.returncode == 2 and "table.sweeps[0].program='fit' must be one of ['plan', 'train']" in program.stderr
     missing = run("reproduce", "table=brownian_table1", "steps=[collect]", cwd=tmp_path)
     assert missing.returncode == 2 and "does not exist: run the jobs first (steps=[jobs])" in missing.stderr
+
+
+def test_collect_hashes_the_checkpoints_a_job_wrote_and_the_ones_its_config_reads(tmp_path):
+    from keyin.cli.reproduce import collect
+    from keyin.io import sha256_of
+
+    model = tmp_path / "model.ckpt"
+    model.write_bytes(b"weights")
+    job = tmp_path / "sweep" / "keyin_seed0"
+    (job / ".hydra").mkdir(parents=True)
+    (job / "checkpoints" / "stage").mkdir(parents=True)
+    (job / "checkpoints" / "stage" / "last.ckpt").write_bytes(b"own")
+    (job / ".hydra" / "config.yaml").write_text(f"planner:\n  checkpoint: {model}\n  other: missing.ckpt\n")
+    (job / "metrics.json").write_text('{"method": "keyin"}')
+    (tmp_path / "sweep" / "empty").mkdir()
+    assert collect(tmp_path / "sweep", tmp_path / "jobs") == ["keyin_seed0"]
+    hashes = json.loads((tmp_path / "jobs" / "keyin_seed0" / "checkpoints.json").read_text())
+    assert hashes == {"checkpoints/stage/last.ckpt": sha256_of(job / "checkpoints" / "stage" / "last.ckpt"), str(model): sha256_of(model)}
+    assert (tmp_path / "jobs" / "keyin_seed0" / "config.yaml").read_text().startswith("planner:")
