@@ -182,13 +182,19 @@ def load_arrays(path: Path, names: tuple[str, ...] | None = None) -> dict[str, n
 
 
 def write_manifest(
-    folder: Path, dataset: str, shards: Mapping[str, list[dict]], config: Mapping[str, Any]
+    folder: Path,
+    dataset: str,
+    shards: Mapping[str, list[dict]],
+    config: Mapping[str, Any],
+    sources: list[dict] | None = None,
 ) -> Path:
     """Atomically write ``folder/manifest.json``.
 
     Args:
         shards: split name -> list of ``{"file": name, "n": clips, "sha256": hex}``.
-        config: the generator config the shards were made with.
+        config: the generator (or import) config the shards were made with.
+        sources: imported datasets only: one entry per source video, which the shards' ``video``
+            array indexes (``keyin.data.imports``).
     """
     manifest = {
         "format_version": FORMAT_VERSION,
@@ -196,6 +202,8 @@ def write_manifest(
         "config": dict(config),
         "splits": dict(shards),
     }
+    if sources is not None:
+        manifest["sources"] = list(sources)
     path = Path(folder) / MANIFEST_NAME
     atomic_write_text(path, json.dumps(manifest, indent=1, sort_keys=True))
     return path
