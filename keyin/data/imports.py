@@ -28,7 +28,7 @@ from rich.progress import Progress
 
 from keyin.data.frames import prepare_video
 from keyin.data.generate import plan_shards
-from keyin.data.hdf5 import load_arrays, read_manifest, split_files, write_manifest, write_shard
+from keyin.data.hdf5 import IMPORT_GENERATOR, load_arrays, read_manifest, split_files, write_manifest, write_shard
 from keyin.data.labels import check_known, check_video_labels, read_labels
 from keyin.data.sources import find_videos
 from keyin.data.windows import (
@@ -43,7 +43,6 @@ from keyin.data.windows import (
 from keyin.errors import DatasetFormatError
 from keyin.io import remove_stale_temporaries, replace_folder, temporary_path
 
-GENERATOR = "keyin-import"  # the shards' ``generator`` attribute
 ORIGIN_ARRAYS = ("video", "first_frame", "frame_stride", "fps")
 
 
@@ -220,7 +219,7 @@ def write_splits(
     for job in plan_shards({split: len(rows) for split, rows in windows.items()}, shard_size):
         rows = windows[job.split][job.start : job.start + job.count]
         arrays = window_arrays([(videos[v], v, start) for v, start in rows], spec)
-        attrs = dict(generator=GENERATOR, config=dict(config), seed=seed, split=job.split, n_cond=spec.n_cond,
+        attrs = dict(generator=IMPORT_GENERATOR, config=dict(config), seed=seed, split=job.split, n_cond=spec.n_cond,
                      first_index=job.start)
         checksum = write_shard(folder / job.file, arrays, attrs)
         entries[job.split].append({"file": job.file, "n": job.count, "sha256": checksum})

@@ -76,6 +76,14 @@ def test_bad_input_gives_one_error_line_and_no_dataset(imported, overrides, mess
     assert not (root / "bad_run" / "metrics.json").exists()
 
 
+def test_other_sizes_than_the_import_name_the_sizes_it_was_imported_with(imported):
+    root, _ = imported
+    line = error_line(run("eval", "model=random", "dataset=custom", "progress=false", cwd=root))
+    assert "image (H, W, C) (16, 16, 1) != config (64, 64, 3)" in line
+    assert "pass the sizes it was imported with (dataset.image_size=16 dataset.channels=1 dataset.n_cond=2 " \
+           "dataset.n_future=10) or import it again with keyin-import" in line
+
+
 def test_keyin_generate_of_the_custom_dataset_points_to_keyin_import(tmp_path):
     line = error_line(run("generate", "dataset=custom", cwd=tmp_path))
     assert "dataset=custom has no generator" in line and "keyin-import source=<videos> dataset=custom" in line
