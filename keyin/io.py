@@ -1,9 +1,10 @@
-"""Generic file utilities: SHA-256 checksums, atomic writes through a temporary name and a rename,
-the removal of the temporary files that killed writers left behind, and JSON-lines files that
-grow a whole line at a time.
+"""Generic file utilities: SHA-256 checksums, atomic writes through a temporary name and a rename
+(of a file, or of a whole folder), the removal of the temporaries that killed writers left behind,
+and JSON-lines files that grow a whole line at a time.
 
-A file being written is named ``.<name>.tmp-<pid>`` in its destination folder until its rename, so
-a reader sees it whole or not at all, and a later run knows from the PID whether its writer is gone.
+A file or folder being written is named ``.<name>.tmp-<pid>`` beside its destination until its
+rename, so a reader sees it whole or not at all, and a later run knows from the PID whether its
+writer is gone.
 A JSON-lines file gets each line in one ``write`` (flushed and fsynced), so a killed writer leaves at
 most one partial last line, without a newline, which :func:`read_json_lines` tells apart.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -75,17 +77,32 @@ def process_alive(pid: int) -> bool:
 
 
 def remove_stale_temporaries(folder: Path) -> list[Path]:
-    """Delete the temporary files that killed writers left in ``folder``; returns them.
+    """Delete the temporary files and folders that killed writers left in ``folder``; returns them.
 
-    A temporary file whose writer (the PID in its name) still runs is kept.
+    A temporary whose writer (the PID in its name) still runs is kept.
     """
     folder, removed = Path(folder), []
     for tmp in folder.glob(f".*{TEMPORARY_TAG}*") if folder.is_dir() else ():
         pid = tmp.name.rpartition(TEMPORARY_TAG)[2]
         if pid.isdigit() and not process_alive(int(pid)):
-            tmp.unlink(missing_ok=True)
+            if tmp.is_dir() and not tmp.is_symlink():
+                shutil.rmtree(tmp, ignore_errors=True)
+            else:
+                tmp.unlink(missing_ok=True)
             removed.append(tmp)
     return removed
+
+
+def replace_folder(complete: Path, destination: Path) -> None:
+    """Put the finished folder ``complete`` (written under ``temporary_path(destination)``) in place of
+    ``destination`` by renames, so a reader finds the old folder or the new one, never a mix; a
+    folder that was there is moved to a temporary name first and deleted after."""
+    complete, destination = Path(complete), Path(destination)
+    old = temporary_path(destination.with_name(f"{destination.name}.old"))
+    if destination.exists():
+        os.replace(destination, old)
+    os.replace(complete, destination)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def append_json_line(path: Path, record: Mapping[str, Any]) -> None:

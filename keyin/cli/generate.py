@@ -10,11 +10,17 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
 from keyin.data.generate import generate_dataset
+from keyin.errors import ConfigError
 
 
 @user_errors
 def generate(cfg: DictConfig) -> dict:
     check_common(cfg)
+    if cfg.dataset.generator is None:
+        raise ConfigError(
+            f"dataset={cfg.dataset.name} has no generator: its clips are imported, not generated; import "
+            f"them with `keyin-import source=<videos> dataset={cfg.dataset.name}`"
+        )
     require_positive_int(cfg.shard_size, "shard_size")
     require_positive_int(cfg.workers, "workers")
     splits = OmegaConf.to_container(cfg.splits)

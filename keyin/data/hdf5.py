@@ -34,6 +34,7 @@ from keyin.paths import inside
 FORMAT_VERSION = 1
 MANIFEST_NAME = "manifest.json"
 REQUIRED_ATTRS = ("format_version", "generator", "config", "seed", "split", "n_cond")
+IMPORT_GENERATOR = "keyin-import"  # the ``generator`` of shards that keyin-import wrote from videos
 
 
 def write_shard(path: Path, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> str:
@@ -164,10 +165,15 @@ def check_compatible(
     if info.clip_length < n_cond + n_future:
         problems.append(f"clip length {info.clip_length} < n_cond + n_future = {n_cond + n_future}")
     if problems:
-        raise DatasetFormatError(
-            f"{info.path} does not match the dataset config: {'; '.join(problems)}; pick the "
-            f"matching dataset= option or regenerate the file"
-        )
+        raise DatasetFormatError(f"{info.path} does not match the dataset config: {'; '.join(problems)}; {mismatch_fix(info)}")
+
+
+def mismatch_fix(info: ShardInfo) -> str:
+    """What to do about a shard of other sizes: an imported one names the sizes it was imported with."""
+    if info.generator != IMPORT_GENERATOR:
+        return "pick the matching dataset= option or regenerate the file"
+    sizes = " ".join(f"dataset.{key}={info.config[key]}" for key in ("image_size", "channels", "n_cond", "n_future"))
+    return f"pass the sizes it was imported with ({sizes}) or import it again with keyin-import"
 
 
 def load_arrays(path: Path, names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
@@ -182,13 +188,19 @@ def load_arrays(path: Path, names: tuple[str, ...] | None = None) -> dict[str, n
 
 
 def write_manifest(
-    folder: Path, dataset: str, shards: Mapping[str, list[dict]], config: Mapping[str, Any]
+    folder: Path,
+    dataset: str,
+    shards: Mapping[str, list[dict]],
+    config: Mapping[str, Any],
+    sources: list[dict] | None = None,
 ) -> Path:
     """Atomically write ``folder/manifest.json``.
 
     Args:
         shards: split name -> list of ``{"file": name, "n": clips, "sha256": hex}``.
-        config: the generator config the shards were made with.
+        config: the generator (or import) config the shards were made with.
+        sources: imported datasets only: one entry per source video, which the shards' ``video``
+            array indexes (``keyin.data.imports``).
     """
     manifest = {
         "format_version": FORMAT_VERSION,
@@ -196,6 +208,8 @@ def write_manifest(
         "config": dict(config),
         "splits": dict(shards),
     }
+    if sources is not None:
+        manifest["sources"] = list(sources)
     path = Path(folder) / MANIFEST_NAME
     atomic_write_text(path, json.dumps(manifest, indent=1, sort_keys=True))
     return path

@@ -49,7 +49,7 @@ def files(tmp_path_factory):
 # id, command, overrides ({files} is the fixture's folder), the problem named, the fix named.
 BAD_INPUTS = [
     ("unknown-option", "eval", ["model=random", "dataset=nope"],
-     "Could not find 'dataset/nope'", "Available options in 'dataset': brownian, pushing"),
+     "Could not find 'dataset/nope'", "Available options in 'dataset': brownian, custom, pushing"),
     ("key-typo", "eval", ["model=random", "dataset.n_futur=3"],
      "unknown config key dataset.n_futur", "did you mean dataset.n_future?"),
     ("key-typo-top-level", "train", ["seeed=3"], "unknown config key seeed", "did you mean seed?"),

@@ -1,0 +1,242 @@
+"""The videos of an import source, found by name and decoded one frame at a time.
+
+A source is one of:
+
+* a video file (``.mp4 .avi .webm .gif .mov .mkv .m4v``), decoded by PyAV (FFmpeg inside its wheel);
+* a folder of image frames (``.png .jpg .jpeg``): one video, its frames in name order;
+* an array file: ``.npy`` holding (T, H, W, C) or (n, T, H, W, C), ``.npz`` one or more such arrays;
+* a robomimic-style HDF5 file (``.hdf5 .h5``): one video per ``data/demo_<i>/obs/<camera key>``;
+* a folder of any of these and of frame folders: each entry's videos (one level deep; hidden
+  entries and files of other kinds are passed over).
+
+Names are in natural order (``frame2`` before ``frame10``, ``demo_2`` before ``demo_10``). Each video
+has an id that names it in label files and in the manifest: its file or folder name, then
+``[key]`` for an ``.npz`` array or a robomimic demo and ``[i]`` for the i-th video of an
+(n, T, H, W, C) array, e.g. ``clips.npz[frames][3]``, ``demos.hdf5[demo_0]``.
+
+Frames are yielded as stored, (H, W, C) arrays of any dtype; :mod:`keyin.data.frames` checks their
+values and fits them to the model.
+"""
+
+from __future__ import annotations
+
+import re
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Iterator
+
+import av
+import h5py
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+from keyin.errors import DatasetFormatError
+
+VIDEO_SUFFIXES = (".mp4", ".avi", ".webm", ".gif", ".mov", ".mkv", ".m4v")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+ARRAY_SUFFIXES = (".npy", ".npz")
+HDF5_SUFFIXES = (".hdf5", ".h5")
+GREY_MODES, COLOUR_MODES = ("1", "L", "LA"), ("RGB", "RGBA", "P", "PA", "CMYK", "YCbCr")
+
+
+@dataclass(frozen=True)
+class Video:
+    """One video of a source: ``frames`` yields its (H, W, C) frames as stored, once."""
+
+    id: str
+    path: Path
+    frames: Iterable[np.ndarray]
+    fps: float | None = None
+
+    @property
+    def where(self) -> str:
+        """How an error names the video: its file, and its id within the file where that differs."""
+        return str(self.path) if self.id == self.path.name else f"{self.path} (video {self.id})"
+
+
+def natural_key(name: str) -> list:
+    """Sort key comparing the digit runs of a name as numbers."""
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
+
+
+def by_name(paths: Iterable[Path]) -> list[Path]:
+    return sorted(paths, key=lambda path: natural_key(path.name))
+
+
+def suffix(path: Path) -> str:
+    return path.suffix.lower()
+
+
+def visible(folder: Path) -> Iterator[Path]:
+    """A folder's entries but hidden ones (``.DS_Store``, ``._frame1.png``, a killed import's folder)."""
+    return (path for path in folder.iterdir() if not path.name.startswith("."))
+
+
+def image_files(folder: Path) -> list[Path]:
+    return by_name(p for p in visible(folder) if p.is_file() and suffix(p) in IMAGE_SUFFIXES)
+
+
+def find_videos(source: Path, camera_key: str) -> Iterator[Video]:
+    """Every video of ``source`` (see the module docstring), in natural name order.
+
+    Raises:
+        DatasetFormatError: the source does not exist, holds no video, or mixes frames and videos.
+    """
+    source = Path(source)
+    if not source.exists():
+        raise DatasetFormatError(f"source {source} does not exist; pass source=<a video file, an array or "
+                                 f"robomimic file, or a folder of videos or of image frames>")
+    if source.is_file():
+        yield from file_videos(source, camera_key)
+        return
+    frames = image_files(source)
+    entries = by_name(p for p in visible(source) if p.is_dir() and image_files(p) or is_media(p))
+    if frames and entries:
+        raise DatasetFormatError(
+            f"{source} holds both image frames ({frames[0].name}, ...) and videos ({entries[0].name}, ...); "
+            f"put the frames of each video in a folder of their own"
+        )
+    if frames:
+        yield frame_folder(source, frames)
+        return
+    if not entries:
+        known = ", ".join(VIDEO_SUFFIXES + IMAGE_SUFFIXES + ARRAY_SUFFIXES + HDF5_SUFFIXES)
+        raise DatasetFormatError(f"{source} holds no videos, frames or array files ({known}); pass another source=")
+    for entry in entries:
+        if entry.is_dir():
+            yield frame_folder(entry, image_files(entry))
+        else:
+            yield from file_videos(entry, camera_key)
+
+
+def is_media(path: Path) -> bool:
+    return path.is_file() and suffix(path) in VIDEO_SUFFIXES + ARRAY_SUFFIXES + HDF5_SUFFIXES
+
+
+def file_videos(path: Path, camera_key: str) -> Iterator[Video]:
+    """The videos of one file, by its suffix."""
+    kind = suffix(path)
+    if kind in VIDEO_SUFFIXES:
+        yield video_file(path)
+    elif kind in ARRAY_SUFFIXES:
+        yield from array_videos(path)
+    elif kind in HDF5_SUFFIXES:
+        yield from robomimic_videos(path, camera_key)
+    else:
+        raise DatasetFormatError(
+            f"{path} is not a file keyin imports (videos {', '.join(VIDEO_SUFFIXES)}; arrays .npy/.npz; "
+            f"robomimic .hdf5); convert it or pass a folder of image frames"
+        )
+
+
+def video_file(path: Path) -> Video:
+    """A video file; its frame rate is the stream's average rate."""
+    try:
+        with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise DatasetFormatError(f"{path} has no video stream; pass a file with video in it")
+            rate = container.streams.video[0].average_rate
+    except av.error.FFmpegError as err:
+        raise unreadable_video(path, err) from None
+    return Video(path.name, path, decoded_frames(path), float(rate) if rate else None)
+
+
+def unreadable_video(path: Path, err: Exception) -> DatasetFormatError:
+    return DatasetFormatError(
+        f"{path} is not a readable video ({err}); it is corrupt or not a video: re-encode it (e.g. "
+        f"`ffmpeg -i {path.name} fixed.mp4`) or remove it from the source"
+    )
+
+
+def decoded_frames(path: Path) -> Iterator[np.ndarray]:
+    """The (H, W, 3) uint8 RGB frames of a video file's first video stream."""
+    try:
+        with av.open(str(path)) as container:
+            for frame in container.decode(container.streams.video[0]):
+                yield frame.to_ndarray(format="rgb24")
+    except av.error.FFmpegError as err:
+        raise unreadable_video(path, err) from None
+
+
+def frame_folder(folder: Path, files: list[Path]) -> Video:
+    return Video(folder.name, folder, image_frames(folder, files))
+
+
+def image_frames(folder: Path, files: list[Path]) -> Iterator[np.ndarray]:
+    """The frames of a folder of images, (H, W, 1) grey or (H, W, 3) RGB; every image one size and kind."""
+    first = None
+    for file in files:
+        try:
+            with Image.open(file) as image:
+                image.load()
+        except (UnidentifiedImageError, OSError) as err:
+            raise DatasetFormatError(f"{file} is not a readable image ({err}); replace or remove it") from None
+        if image.mode not in GREY_MODES + COLOUR_MODES:
+            raise DatasetFormatError(
+                f"{file} is a {image.mode!r} image (16-bit or float); save the frames as 8-bit grey or RGB"
+            )
+        kind = (image.size, image.mode in GREY_MODES)
+        if first is None:
+            first = (file, kind)
+        elif kind != first[1]:
+            raise DatasetFormatError(
+                f"{folder} mixes image sizes or kinds: {first[0].name} is {describe(*first[1])}, {file.name} is "
+                f"{describe(*kind)}; give every frame of a video one size and kind (or move the odd ones out)"
+            )
+        grey = image.convert("L") if kind[1] else image.convert("RGB")
+        yield np.asarray(grey).reshape(grey.height, grey.width, -1)
+
+
+def describe(size: tuple[int, int], grey: bool) -> str:
+    return f"{size[0]}x{size[1]} {'grey' if grey else 'colour'}"
+
+
+def array_videos(path: Path) -> Iterator[Video]:
+    """The videos of an ``.npy`` or ``.npz`` file: (T, H, W, C) is one, (n, T, H, W, C) n."""
+    try:
+        if suffix(path) == ".npy":
+            arrays = [(path.name, np.load(path, mmap_mode="r", allow_pickle=False))]
+        else:
+            with np.load(path, allow_pickle=False) as archive:
+                arrays = [(f"{path.name}[{key}]", archive[key]) for key in sorted(archive.files, key=natural_key)]
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as err:
+        raise DatasetFormatError(
+            f"{path} is not a readable {suffix(path)} file ({err}); write the frames with numpy.save / "
+            f"numpy.savez (no pickled objects)"
+        ) from None
+    for name, array in arrays:
+        if array.ndim == 4:
+            yield Video(name, path, array)
+        elif array.ndim == 5:
+            yield from (Video(f"{name}[{i}]", path, video) for i, video in enumerate(array))
+        else:
+            raise DatasetFormatError(
+                f"{path}: array {name} has shape {array.shape}; frames are (T, H, W, C) or (n, T, H, W, C) "
+                f"(grey frames need their channel axis: frames[..., None])"
+            )
+
+
+def robomimic_videos(path: Path, camera_key: str) -> Iterator[Video]:
+    """One video per ``data/demo_<i>/obs/<camera_key>`` of a robomimic-style HDF5 file."""
+    try:
+        handle = h5py.File(path, "r")
+    except OSError as err:
+        raise DatasetFormatError(f"{path} is not a readable HDF5 file ({err}); it is truncated or corrupt") from None
+    with handle:
+        data = handle.get("data")
+        demos = sorted(data, key=natural_key) if isinstance(data, h5py.Group) else []
+        if not demos:
+            raise DatasetFormatError(
+                f"{path} has no data/demo_* groups; a robomimic-style file holds its frames in "
+                f"data/demo_<i>/obs/<camera key>"
+            )
+        for demo in demos:
+            obs = data[demo].get("obs")
+            if not isinstance(obs, h5py.Group) or not isinstance(obs.get(camera_key), h5py.Dataset):
+                cameras = sorted(k for k, v in (obs or {}).items() if isinstance(v, h5py.Dataset) and v.ndim == 4)
+                raise DatasetFormatError(
+                    f"{path}: data/{demo}/obs has no '{camera_key}'; set camera_key= to the camera to "
+                    f"import ({', '.join(cameras) or 'this demo has no (T, H, W, C) observation'})"
+                )
+            yield Video(f"{path.name}[{demo}]", path, obs[camera_key][()])
