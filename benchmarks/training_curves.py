@@ -40,7 +40,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--table", type=Path, required=True)
     args = parser.parse_args()
-    runs = {label: validation_rows(Path(folder)) for label, _, folder in (run.partition("=") for run in args.runs)}
+    runs = {label: validation_rows(Path(folder)) for label, _, folder in (run.rpartition("=") for run in args.runs)}
     fig, axes = plt.subplots(1, len(CURVES), figsize=(4.2 * len(CURVES), 3.2))
     for label, rows in runs.items():
         for axis, (key, title) in zip(axes, CURVES.items()):
