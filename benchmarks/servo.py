@@ -41,7 +41,7 @@ from keyin.envs.geometry import apply_homography
 from keyin.envs.layout import Layout
 from keyin.planning.cem import sample_gaussian
 from keyin.planning.rollout import BatchRollout, LoopRollout, Simulator, env_substeps
-from keyin.planning.servo import ServoParams, ServoTrajectory, pixel_cost, run_servo, subgoal_pixels
+from keyin.planning.servo import ServoParams, ServoTrajectory, pixel_cost, projected_puck, run_servo, subgoal_pixels
 
 REPEATS = 3
 
@@ -107,8 +107,8 @@ def random_plans(params: ServoParams, seed: int) -> np.ndarray:
 def cost_difference(env, target: np.ndarray, params: ServoParams, seed: int) -> float:
     """Max |cost difference| (pixels) between the two simulators on one batch of plans from now."""
     plans = random_plans(params, seed)
-    homography, puck = env.physics.homography(), env.physics.PUCK
-    costs = [pixel_cost(homography, target, simulator.final_qpos(plans)[:, puck])
+    homography = env.physics.homography()
+    costs = [pixel_cost(projected_puck(homography, simulator.final_qpos(plans)), target)
              for simulator in (BatchRollout(env, params.action_repeat), LoopRollout(env, params.action_repeat))]
     return float(np.abs(costs[0] - costs[1]).max())
 

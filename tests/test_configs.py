@@ -13,6 +13,7 @@ from omegaconf import OmegaConf
 
 from keyin.cli.app import CONFIG_MODULE
 from keyin.cli.checks import SCALE_KEYS
+from keyin.planning.servo import ServoParams
 from tests.cli.runner import error_line, run
 from tests.configs import CONFIGS, OLD_SMOKE, OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
 
@@ -101,6 +102,18 @@ GROUPS = {
 def test_every_group_option_composes_and_resolves(root, group, option):
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         resolve(root, [f"{group}={option}"])  # every interpolation has a value
+
+
+# What each planner/low_level option gives the servo.
+LOW_LEVEL = {"servo": ServoParams(), "servo_env_steps": ServoParams(action_repeat=1, max_timesteps=60, max_steps_per_subgoal=10)}
+
+
+@pytest.mark.parametrize("low_level", options("planner/low_level"))
+@pytest.mark.parametrize("planner", options("planner"))
+def test_every_low_level_option_composes_with_every_planner(planner, low_level):
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = resolve("plan", [f"planner={planner}", f"planner/low_level@planner={low_level}"])
+    assert ServoParams.from_config(cfg["planner"]) == LOW_LEVEL[low_level]
 
 
 @pytest.mark.parametrize("table", options("table"))

@@ -79,6 +79,7 @@ def check_plan(cfg: DictConfig) -> float:
 @user_errors
 def plan(cfg: DictConfig) -> dict:
     threshold = check_plan(cfg)
+    servo = ServoParams.from_config(cfg.planner)
     controller = instantiate(cfg.planner.controller)  # a learned planner loads (and checks) its checkpoint
     files = task_files(cfg)
     tasks, generator_config = read_tasks(files)
@@ -95,7 +96,7 @@ def plan(cfg: DictConfig) -> dict:
     job = PlanJob(
         planner=cfg.planner.name,
         controller=controller,
-        servo=ServoParams.from_config(cfg.planner),
+        servo=servo,
         generator=task_generator(generator_config),
         seed=cfg.seed,
         threshold=threshold,

@@ -2,15 +2,14 @@
 
 Each servo step:
 
-1. observe the puck's pixel (the true position through the camera homography, no rendering) and
-   switch subgoal (:func:`advance_subgoal`): past every subgoal it is within
-   ``subgoal_threshold_px`` of, or to the next one after ``max_steps_per_subgoal`` steps on it;
-   never past the last one (the goal);
+1. observe the puck's pixel (:func:`puck_observer`) and switch subgoal (:func:`advance_subgoal`):
+   past every subgoal it is within ``subgoal_threshold_px`` of, or to the next one after
+   ``max_steps_per_subgoal`` steps on it; never past the last one (the goal);
 2. stop if the last subgoal is within ``goal_threshold_px``;
 3. CEM over ``horizon`` actions ``(horizon, 2)`` from ``N(0, init_std²)`` (re-initialised every
-   step), samples clipped to ``±max_action``; cost = pixel distance between the puck after the last
-   action (simulated from the current state, :mod:`keyin.planning.rollout`) and the subgoal's puck
-   pixel (final-step cost only);
+   step), samples clipped to ``±max_action``; cost = pixel distance between the puck observed after
+   the last action (simulated from the current state, :mod:`keyin.planning.rollout`) and the
+   subgoal's puck pixel (final-step cost only);
 4. execute the first action of the best plan: the lowest cost over all CEM iterations (the paper
    takes the best of the last iteration; the rollouts are deterministic, so the best seen is at
    least as good by the same cost).
@@ -20,18 +19,32 @@ environment steps (REFERENCE §7.2), so ``max_timesteps = 60`` servo steps are t
 time limit, ``max_steps_per_subgoal = 10`` is about twice a demonstration push (4-6 saved frames),
 and a plan of ``horizon = 8`` actions looks 1.6 s ahead. Subgoal pixels come from colour
 segmentation of the subgoal images (:func:`subgoal_pixels`), as for a predicted keyframe.
+
+How the servo sees the puck, in the current state and in a candidate's final state
+(``observe``, config ``servo_observe``):
+
+* ``state`` (default, fast): the true puck centre through the camera homography, nothing rendered;
+* ``pixels`` (the paper's): the puck centroid segmented by colour from the 64 x 64 top-camera
+  frame of the state, drawn by the analytic renderer (:mod:`keyin.envs.render`, MuJoCo's pixels),
+  the whole CEM batch at once. A frame without a visible puck has no position: a candidate ending
+  so costs infinity, and a current frame so reaches no subgoal (in a task the border keeps the
+  puck in view and it stands higher than every box and the pusher, so neither is expected).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import functools
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from keyin.envs.geometry import apply_homography
+from keyin.envs.pushing import PushingPhysics, SceneParams
+from keyin.envs.render import render_top
 from keyin.envs.segmentation import puck_centroid
+from keyin.errors import ConfigError
 from keyin.planning.cem import CEMParams, cem
 from keyin.planning.rollout import BatchRollout, Simulator
 
@@ -49,7 +62,12 @@ CONFIG_KEYS = {
     "subgoal_threshold_px": "subgoal_threshold_px",
     "goal_threshold_px": "goal_threshold_px",
     "servo_threads": "threads",
+    "servo_observe": "observe",
 }
+# How the servo sees the puck (module docstring).
+OBSERVATIONS = ("state", "pixels")
+# (n, nq) joint positions -> (n, 2) puck pixels (column, row), NaN where no puck is seen.
+PuckObserver = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -68,6 +86,11 @@ class ServoParams:
     subgoal_threshold_px: float = 3.0  # reach radius of a subgoal (3 px = 0.094 units)
     goal_threshold_px: float = 3.0  # stop within this of the last subgoal (0: never stop early)
     threads: int = 1  # mujoco.rollout threads
+    observe: str = "state"  # one of OBSERVATIONS
+
+    def __post_init__(self) -> None:
+        if self.observe not in OBSERVATIONS:
+            raise ConfigError(f"planner.servo_observe={self.observe!r} must be one of {', '.join(OBSERVATIONS)}")
 
     @classmethod
     def from_config(cls, config: Mapping[str, Any]) -> "ServoParams":
@@ -86,9 +109,10 @@ class ServoTrajectory:
         puck, pusher: (T + 1, 2) world positions at the start and after every step.
         subgoal: (T,) index (into the given subgoals) each step planned for.
         actions: (T, 2) executed actions.
-        plan_cost: (T,) predicted pixel distance to the subgoal of the executed plan.
-        reached_goal: the final puck is within ``goal_threshold_px`` of the last subgoal (the servo
-            stops as soon as it is).
+        plan_cost: (T,) predicted pixel distance to the subgoal of the executed plan (inf if no
+            candidate's final frame showed the puck).
+        reached_goal: the final puck, as the servo sees it, is within ``goal_threshold_px`` of the
+            last subgoal (the servo stops as soon as it is).
         final_error: shortest path around the wall (inflated by the puck radius) from the final puck
             to the task's goal, world units (REFERENCE §5.2).
     """
@@ -128,9 +152,32 @@ def advance_subgoal(
     return index
 
 
-def pixel_cost(homography: np.ndarray, target: np.ndarray, puck: np.ndarray) -> np.ndarray:
-    """(n,) pixel distances between the puck positions (n, 2), projected, and the target pixel (2,)."""
-    return np.linalg.norm(apply_homography(homography, puck) - target, axis=-1)
+def projected_puck(homography: np.ndarray, qpos: np.ndarray) -> np.ndarray:
+    """(n, nq) joint positions -> (n, 2) pixels of the true puck centres through the homography (3, 3)."""
+    return apply_homography(homography, qpos[:, PushingPhysics.PUCK])
+
+
+def segmented_puck(scene: SceneParams, wall: np.ndarray, qpos: np.ndarray) -> np.ndarray:
+    """(n, nq) joint positions -> (n, 2) puck centroids segmented from their rendered frames.
+
+    All ``n`` top-camera frames of the scene with ``wall`` (5,) are drawn in one
+    :func:`keyin.envs.render.render_top` call; NaN where a frame shows no puck.
+    """
+    frames = render_top(scene, wall, qpos[:, PushingPhysics.PUCK], qpos[:, PushingPhysics.PUSHER])
+    return subgoal_pixels(frames)
+
+
+def puck_observer(env: Any, observe: str) -> PuckObserver:
+    """How the servo sees the puck in ``env``'s scene (``observe`` in :data:`OBSERVATIONS`)."""
+    if observe == "pixels":
+        return functools.partial(segmented_puck, env.task.scene, env.physics.wall())
+    return functools.partial(projected_puck, env.physics.homography())
+
+
+def pixel_cost(pixels: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """(...) pixel distances between puck pixels and targets (..., 2), broadcast; inf where NaN (not seen)."""
+    distance = np.linalg.norm(pixels - targets, axis=-1)
+    return np.where(np.isnan(distance), np.inf, distance)
 
 
 def execute(env: Any, action: np.ndarray, repeat: int) -> bool:
@@ -151,7 +198,8 @@ def run_servo(
     """Servo the environment from its current state through the subgoals.
 
     Args:
-        env: the dm_control pushing environment at the task's start (``pixels=False`` is enough).
+        env: the dm_control pushing environment at the task's start (``pixels=False`` is enough:
+            ``params.observe = "pixels"`` draws its frames with the analytic renderer).
         targets: (K, 2) subgoal puck pixels (:func:`subgoal_pixels`), the last one the goal's. A
             subgoal without a visible puck (NaN) is skipped; the goal must show the puck.
         params: the servo's constants.
@@ -164,15 +212,14 @@ def run_servo(
     visible = np.flatnonzero(~np.isnan(targets).any(axis=-1))
     simulator = simulator or BatchRollout(env, params.action_repeat, params.threads)
     physics = env.physics
-    homography = physics.homography()
-    puck_slice = physics.PUCK
+    observe = puck_observer(env, params.observe)
     cem_params = params.cem_params()
     shape = (params.horizon, 2)
     puck, pusher = [physics.puck_position()], [physics.pusher_position()]
     subgoals, actions, costs = [], [], []
     index = steps_on = 0  # into ``visible``
     for _ in range(params.max_timesteps):
-        distances = pixel_cost(homography, targets[visible], puck[-1][None])
+        distances = pixel_cost(observe(physics.data.qpos[None]), targets[visible])
         switched = advance_subgoal(
             index, steps_on, distances, params.subgoal_threshold_px, params.max_steps_per_subgoal
         )
@@ -182,7 +229,7 @@ def run_servo(
             break
         target = targets[visible[index]]
         plan = cem(
-            lambda plans: pixel_cost(homography, target, simulator.final_qpos(plans)[:, puck_slice]),
+            lambda plans: pixel_cost(observe(simulator.final_qpos(plans)), target),
             np.zeros(shape),
             np.full(shape, params.init_std),
             cem_params,
@@ -197,7 +244,7 @@ def run_servo(
         pusher.append(physics.pusher_position())
         if ended:
             break
-    goal_px = pixel_cost(homography, targets[-1], puck[-1][None])[0]
+    goal_px = pixel_cost(observe(physics.data.qpos[None]), targets[-1])[0]
     return ServoTrajectory(
         puck=np.stack(puck),
         pusher=np.stack(pusher),

@@ -54,6 +54,16 @@ def test_planners_run_end_to_end(root, planner, subgoals):
     assert sorted(path.name for path in (root / planner / "pictures").glob("*")) == drawn
 
 
+def test_the_pixel_servo_and_the_env_step_budget_run_end_to_end(root):
+    overrides = ("planner=demo_subgoals", "planner.servo_observe=pixels", "planner/low_level@planner=servo_env_steps")
+    result = run("plan", *overrides, "hydra.run.dir=pixels", "tasks=2", "pictures=0", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr
+    settings = json.loads((root / "pixels" / "plan.json").read_text())["planner"]
+    assert settings["servo_observe"] == "pixels" and settings["servo_action_repeat"] == 1
+    records = journal(root / "pixels")
+    assert [r["task"] for r in records] == [0, 1] and all(r["steps"] == 3 and r["subgoals"] == 7 for r in records)
+
+
 def test_a_list_of_tasks_replays_those_tasks_with_their_pictures(root):
     result = run("plan", "planner=no_subgoals", "hydra.run.dir=chosen", "tasks=[2,0]", "pictures=[2]", *TINY, cwd=root)
     assert result.returncode == 0, result.stderr
@@ -96,6 +106,7 @@ def test_resuming_with_other_settings_is_refused(root):
 @pytest.mark.parametrize("overrides,message", [
     (("planner=surprise", "planner.checkpoint=missing.ckpt"), "checkpoint missing.ckpt does not exist"),
     (("success_threshold=0",), "success_threshold=0 must be a positive number"),
+    (("planner.servo_observe=rgb",), "planner.servo_observe='rgb' must be one of state, pixels"),
     (("tasks=0",), "tasks=0 plays nothing"),
     (("tasks=[2,999]",), "no task with index [999]"),
     (("pictures=-1",), "pictures=-1 must be an integer n >= 0"),

@@ -1,4 +1,5 @@
-"""The low-level servo: subgoal switching, reaching a nearby subgoal, image targets, config."""
+"""The low-level servo: subgoal switching, reaching a nearby subgoal, image targets, config, and
+the servo that sees only pixels."""
 
 
 import numpy as np
@@ -6,7 +7,21 @@ import pytest
 from omegaconf import OmegaConf
 
 from keyin.envs.geometry import apply_homography
-from keyin.planning.servo import CONFIG_KEYS, ServoParams, advance_subgoal, run_servo, subgoal_pixels
+from keyin.envs.segmentation import puck_centroid
+from keyin.errors import ConfigError
+from keyin.planning.cem import sample_gaussian
+from keyin.planning.rollout import BatchRollout
+from keyin.planning.servo import (
+    CONFIG_KEYS,
+    ServoParams,
+    advance_subgoal,
+    pixel_cost,
+    projected_puck,
+    puck_observer,
+    run_servo,
+    segmented_puck,
+    subgoal_pixels,
+)
 from tests.configs import CONFIGS
 
 # A small, fast budget; the pusher starts right behind the puck.
@@ -77,3 +92,52 @@ def test_params_from_the_planner_config():
     params = ServoParams.from_config(config)
     assert params == ServoParams()  # the dataclass defaults are the paper's / the config's numbers
     assert params.cem_params().low == -1.0 and params.cem_params().samples == 200
+
+
+# Joint positions (pusher x, y, puck x, y) in the conftest layout: at rest, pusher touching the puck,
+# puck touching the wall's lower face, puck in the border's corner, pusher overlapping the puck.
+STATES = np.array([
+    [0.0, -0.42, 0.0, -0.3],
+    [0.0, -0.2, 0.0, -0.1],
+    [0.05, 0.4, 0.0, 0.46],
+    [0.5, 0.5, 0.89, -0.89],
+    [0.3, 0.3, 0.33, 0.32],
+])
+OUT_OF_VIEW = np.array([[0.0, 0.0, 3.0, 0.0]])
+
+
+def test_the_segmented_puck_agrees_with_the_projected_one_within_a_pixel(env):
+    seen = segmented_puck(env.task.scene, env.physics.wall(), STATES)
+    true = projected_puck(env.physics.homography(), STATES)
+    assert np.linalg.norm(seen - true, axis=-1).max() < 0.5
+    assert np.isnan(segmented_puck(env.task.scene, env.physics.wall(), OUT_OF_VIEW)).all()
+
+
+def mujoco_cost(env, qpos: np.ndarray, target: np.ndarray) -> float:
+    """Brute force: one state rendered by MuJoCo's own camera, segmented; inf without a puck."""
+    with env.physics.reset_context():
+        env.physics.set_positions(qpos[2:4], qpos[0:2])
+    centroid, _ = puck_centroid(env.physics.render_top())
+    return float(np.linalg.norm(centroid - target)) if not np.isnan(centroid).any() else np.inf
+
+
+def test_the_pixel_cost_of_a_batch_is_each_final_frame_rendered_and_segmented(env):
+    plans = sample_gaussian(np.zeros((4, 2)), 1.0, 12, np.random.default_rng(4), -1.0, 1.0)
+    finals = np.concatenate([BatchRollout(env, 2).final_qpos(plans), OUT_OF_VIEW])
+    target = np.array([30.0, 38.0])
+    costs = pixel_cost(puck_observer(env, "pixels")(finals), target)
+    assert costs[-1] == np.inf and np.isfinite(costs[:-1]).all()
+    np.testing.assert_array_equal(costs, [mujoco_cost(env, qpos, target) for qpos in finals])
+
+
+def test_the_pixel_servo_reaches_the_goal_like_the_state_one(env):
+    targets = pixels(env, [[0.0, -0.15]])
+    params = ServoParams(horizon=4, samples=40, elites=5, iterations=2, max_timesteps=10, observe="pixels")
+    result = run_servo(env, targets, params, np.random.default_rng(1))
+    assert result.reached_goal and len(result.subgoal) < params.max_timesteps
+    assert np.linalg.norm(pixels(env, result.puck[-1]) - targets[0]) < params.goal_threshold_px + 0.5
+
+
+def test_an_unknown_observation_is_refused():
+    with pytest.raises(ConfigError, match="servo_observe='rgb' must be one of state, pixels"):
+        ServoParams(observe="rgb")
