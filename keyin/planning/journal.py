@@ -36,6 +36,10 @@ def flat(settings: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
+# Settings added since a run dir may have been claimed, at the value that plans as before.
+ADDED_SINCE = {"planner.servo_observe": "state", "planner.model_seed": 0}
+
+
 def claim_run_dir(folder: Path, settings: Mapping[str, Any]) -> None:
     """Record ``settings`` in ``folder/plan.json``, or check that they are the recorded ones.
 
@@ -47,7 +51,8 @@ def claim_run_dir(folder: Path, settings: Mapping[str, Any]) -> None:
     if not path.is_file():
         atomic_write_text(path, json.dumps(settings, indent=1, sort_keys=True))
         return
-    before, now = flat(json.loads(path.read_text())), flat(settings)
+    now = flat(settings)
+    before = {**{key: value for key, value in ADDED_SINCE.items() if key in now}, **flat(json.loads(path.read_text()))}
     changed = [key for key in sorted({*before, *now}) if before.get(key) != now.get(key)]
     if changed:
         differences = ", ".join(f"{key}={before.get(key)!r} (now {now.get(key)!r})" for key in changed)

@@ -31,3 +31,10 @@ def test_a_run_dir_keeps_its_settings(tmp_path):
     assert json.loads((tmp_path / "plan.json").read_text()) == settings
     with pytest.raises(ConfigError, match=r"planner.max_timesteps=3 \(now 4\), seed=0 \(now None\)"):
         claim_run_dir(tmp_path, {"planner": {"name": "random", "max_timesteps": 4}})
+
+
+def test_a_run_dir_claimed_before_a_setting_existed_resumes_at_its_old_value(tmp_path):
+    (tmp_path / "plan.json").write_text('{"planner": {"name": "keyin"}, "seed": 0}')  # no servo_observe, no model_seed
+    claim_run_dir(tmp_path, {"planner": {"name": "keyin", "servo_observe": "state", "model_seed": 0}, "seed": 0})
+    with pytest.raises(ConfigError, match="planner.servo_observe='state' \\(now 'pixels'\\)"):
+        claim_run_dir(tmp_path, {"planner": {"name": "keyin", "servo_observe": "pixels", "model_seed": 0}, "seed": 0})
