@@ -143,7 +143,8 @@ def keyin_keyframes(
     Args:
         model: a trained :class:`keyin.models.KEYIN` in eval mode.
         clips: (B, L, C, H, W) in [0, 1]; future_length: (B,) valid future frames.
-        rule: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9),
+        rule: "offsets" (the paper's: argmax offsets, positions by their sums, §3.9; with offset
+            evidence each δ^t reads the previous keyframe where the argmax offsets put it),
             "boundaries" (with offset evidence: the most likely keyframe set under LSTM_inf's
             per-frame boundary scores, within M gaps of at most S) or "map" (the exact best
             segmentation under the frozen interpolator's pixel BCE with ``keyframe_cost`` per
@@ -156,7 +157,8 @@ def keyin_keyframes(
     """
     if rule not in KEYIN_RULES:
         raise ValueError(f"rule must be one of {KEYIN_RULES}, got {rule!r}")
-    embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False)
+    # the posterior mean, its offset evidence read along the argmax path (what the readout reads)
+    embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
     if rule == "offsets":
         return offset_keyframes(keys.offset_probs, future_length)
     n_future, lengths = clips.shape[1] - model.n_cond, future_length.cpu()

@@ -172,22 +172,28 @@ def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
     return totals
 
 
-def segmentation_offsets(positions: list[list[int]], n_future: int, n_keyframes: int) -> Tensor:
-    """Teacher offsets of the keyframes at given interior positions.
+def segmentation_offsets(
+    positions: list[list[int]], lengths: list[int], n_keyframes: int, max_offset: int
+) -> Tensor:
+    """Teacher offsets of the keyframes at given interior positions, and of the one that leaves the clip.
 
     Args:
         positions: per clip, increasing interior keyframe positions (as from
             :func:`best_segmentation`).
-        n_future: N.
+        lengths: per clip, its valid future frames.
         n_keyframes: M.
+        max_offset: S.
     Returns:
-        (B, M) int64 offsets in 1…S for the interior keyframes; ``IGNORE_OFFSET`` for the rest.
-        The gap that closes the clip at ``N - 1`` gets no target: a keyframe there is no
-        discovered keyframe (the last frame is never one, and evaluation counts it as a false
-        positive), so where the chain goes after the last interior keyframe is left to the soft loss.
+        (B, M) int64 offsets in 1…S: the interior keyframes', then the offset that puts the next
+        keyframe just past the clip's last valid frame (where the argmax readout drops it: a keyframe
+        on the last frame would be a false positive, since the last frame is never one), where S
+        allows; ``IGNORE_OFFSET`` for the rest.
     """
     offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
-    for b, row in enumerate(positions):
-        interior = [gap for _, gap in _gaps(row, n_future)][: min(len(row), n_keyframes)]
+    for b, (row, length) in enumerate(zip(positions, lengths)):
+        interior = [gap for _, gap in _gaps(row, length)][: min(len(row), n_keyframes)]
+        leaving = length + 1 - (row[len(interior) - 1] + 1 if interior else 0)  # to extended index length + 1
+        if len(interior) < n_keyframes and leaving <= max_offset:
+            interior.append(leaving)
         offsets[b, : len(interior)] = torch.tensor(interior, dtype=torch.long)
     return offsets

@@ -31,7 +31,7 @@ def segmentation_targets(
         n_keyframes: M.
         keyframe_cost: price per keyframe in the DP (0: every gap it may).
     Returns:
-        offsets (B, M) int64 (``IGNORE_OFFSET`` where there is no interior keyframe) and
+        offsets (B, M) int64 (:func:`keyin.decode.segmentation.segmentation_offsets`) and
         boundaries (B, N) float, 1 at the interior keyframes; both on ``boundary_emb``'s device.
     """
     n_future = boundary_emb.shape[1] - 1
@@ -42,7 +42,7 @@ def segmentation_targets(
     boundaries = torch.zeros(len(positions), n_future)
     for row, clip_positions in enumerate(positions):
         boundaries[row, clip_positions] = 1.0
-    offsets = segmentation_offsets(positions, n_future, n_keyframes)
+    offsets = segmentation_offsets(positions, lengths.tolist(), n_keyframes, interpolator.max_offset)
     return offsets.to(boundary_emb.device), boundaries.to(boundary_emb.device)
 
 

@@ -73,11 +73,13 @@ def test_interpolation_costs_match_direct_decoding():
     assert torch.isinf(costs[:, 5, 1]).all() and torch.isfinite(costs[:, 5, 0]).all()
 
 
-def test_segmentation_offsets_teach_interior_keyframes_only():
-    offsets = segmentation_offsets([[3, 8], [9, 19], []], n_future=12, n_keyframes=4)
-    assert offsets[0].tolist() == [4, 5, IGNORE_OFFSET, IGNORE_OFFSET]  # not the gap closing at 11
-    assert offsets[1, :2].tolist() == [10, 10]
-    assert offsets[2].tolist() == [IGNORE_OFFSET] * 4
+def test_segmentation_offsets_teach_the_interior_keyframes_then_leaving_the_clip():
+    offsets = segmentation_offsets([[3, 8], [1, 5, 9], [], [2, 5]], [12, 12, 6, 12], n_keyframes=3, max_offset=5)
+    # extended indices 4 and 9, then 13 = just past frame 11 (not the closing gap's 12: the last frame)
+    assert offsets[0].tolist() == [4, 5, 4]
+    assert offsets[1].tolist() == [2, 4, 4]  # all M keyframes are interior: none is left to leave
+    assert offsets[2].tolist() == [IGNORE_OFFSET] * 3  # 6 + 1 frames to leave from K^0 > S = 5
+    assert offsets[3].tolist() == [3, 3, IGNORE_OFFSET]  # from extended index 6, leaving takes 7 > S
 
 
 def test_offset_teacher_loss_is_cross_entropy_on_kept_keyframes():
