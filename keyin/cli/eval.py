@@ -1,5 +1,6 @@
 """keyin-eval model=random|constant dataset=<name> (or ckpt=<path>): keyframe F1 (paper Table 1);
-with video_samples=k also video-prediction PSNR/SSIM of a stage-2 checkpoint (REFERENCE §5.4)."""
+with video_samples=k also video-prediction PSNR/SSIM of a stage-2 checkpoint (REFERENCE §5.4) and
+pictures of its rollouts and of k prior samples of the first video_clips clips (the paper's Fig. 5, 10)."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from keyin.data.hdf5 import split_files
 from keyin.errors import ConfigError
 from keyin.decode.rules import SegmentationDiscoverer
 from keyin.eval.discovery import score_methods
-from keyin.eval.video import evaluate_video, save_rollouts
+from keyin.eval.video import evaluate_video, save_prior_samples, save_rollouts
 from keyin.lit.checkpoints import load_trained_module
 
 
@@ -26,9 +27,20 @@ def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:
     return split_files(Path(cfg.data_dir) / dataset_name, cfg.split)
 
 
+def eval_clips(cfg: DictConfig, dataset: DictConfig) -> ShardClips:
+    """The clips of ``cfg.data`` (or of ``cfg.split`` in ``cfg.data_dir``) at the sizes of ``dataset``."""
+    return ShardClips(
+        eval_files(cfg, dataset.name),
+        (dataset.image_size, dataset.image_size, dataset.channels),
+        dataset.n_cond,
+        dataset.n_future,
+    )
+
+
 def check_video_samples(cfg: DictConfig, stage: str | None) -> None:
     """``video_samples``: 0 (off), or a count of prior samples for a stage-2 checkpoint."""
     require_int_at_least(cfg.video_samples, "video_samples", 0)
+    require_positive_int(cfg.video_clips, "video_clips")
     if cfg.video_samples and stage != "keyframes":
         evaluated = f"ckpt= holds a '{stage}' checkpoint" if stage else "a baseline predicts no video"
         raise ConfigError(
@@ -61,18 +73,14 @@ def evaluate(cfg: DictConfig) -> dict:
     else:
         check_video_samples(cfg, None)
         discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
-    clips = ShardClips(
-        eval_files(cfg, dataset.name),
-        (dataset.image_size, dataset.image_size, dataset.channels),
-        dataset.n_cond,
-        dataset.n_future,
-    )
+    clips = eval_clips(cfg, dataset)
     loader = dict(batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress)
     metrics = score_methods(discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), **loader)
     if cfg.video_samples:
         torch.manual_seed(cfg.seed)  # the prior samples
         metrics["video"] = evaluate_video(module.model, clips, cfg.video_samples, **loader)
-        save_rollouts(module.model, clips, cfg.video_samples, run_dir())
+        save_rollouts(module.model, clips, cfg.video_samples, run_dir(), cfg.video_clips)
+        metrics["video_pictured"] = save_prior_samples(module.model, clips, cfg.video_samples, run_dir(), cfg.video_clips)
     metrics.update(dataset=dataset.name, seed=cfg.seed)
     write_metrics(metrics, run_dir())
     return metrics

@@ -137,6 +137,23 @@ class PushingGenerator:
             f"loosen min/max_push_frames or raise max_attempts"
         )
 
+    def demos_from(self, layout: Any, count: int, seed: int) -> list[Any]:
+        """Up to ``count`` accepted demos on one :class:`keyin.envs.layout.Layout` (each with its own
+        detour side and subgoals), attempt ``k`` drawn from ``SeedSequence(seed, spawn_key=(k,))``,
+        at most ``max_attempts * count`` attempts."""
+        from keyin.envs.demonstrator import run_demo
+
+        env = self.environment()
+        params = self._parts()[2]
+        demos, attempt = [], 0
+        while len(demos) < count and attempt < self.max_attempts * count:
+            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(attempt,)))
+            demo = run_demo(env, layout, rng, params)
+            if demo is not None:
+                demos.append(demo)
+            attempt += 1
+        return demos
+
     def render_states(self, states: np.ndarray) -> np.ndarray:
         """(K, S) physics states -> (K, H, W, 3) uint8 top-camera frames rendered by MuJoCo."""
         physics = self.environment().physics

@@ -218,3 +218,61 @@ def apply_homography(homography: np.ndarray, points: np.ndarray) -> np.ndarray:
     points = np.asarray(points, dtype=np.float64)
     mapped = points @ homography[:, :2].T + homography[:, 2]
     return mapped[..., :2] / mapped[..., 2:]
+
+
+VIEW_HALF = 1.0
+"""The top camera of :mod:`keyin.envs.pushing` films ``[-VIEW_HALF, VIEW_HALF]²`` straight down,
+orthographic (its ``fovy`` is ``2 * VIEW_HALF``)."""
+
+
+def top_view_homography(image_size: int) -> np.ndarray:
+    """(3, 3) world (x, y) -> pixel (column, row) of the top camera at ``image_size`` pixels, without
+    MuJoCo: :meth:`keyin.envs.pushing.PushingPhysics.homography` (tests/envs/test_pushing.py)."""
+    return plane_homography(
+        np.array([0.0, 0.0, 1.0]), np.eye(3), 2 * VIEW_HALF, True, image_size, image_size, plane_z=0.0
+    )
+
+
+PASSING_SIDES = ("left", "right", "through", "none")
+"""How a puck track goes past the wall (:func:`passing_side`)."""
+
+
+def end_side(end: float, wall: np.ndarray) -> str:
+    """"right" or "left": the wall end at wall-frame ``sign(end)`` (the demonstrator's detour
+    ``side``) is the one at the larger or the smaller world x, i.e. on the right or the left of the
+    top camera's picture (pixel columns grow with x)."""
+    return "right" if np.sign(end) * math.cos(float(wall[4])) > 0 else "left"
+
+
+def passing_side(track: np.ndarray, wall: np.ndarray) -> str:
+    """Which way a puck track goes past the wall: one of :data:`PASSING_SIDES`.
+
+    In the wall frame (:func:`to_wall_frame`: ``a`` along the wall, ``n`` along its normal) the
+    track starts on the side ``sign(n)`` of its first point; it *crosses* at the first point with
+    ``n`` of the other sign, at ``a*``, the along-coordinate where the segment from the point
+    before reaches ``n = 0`` (linear interpolation). A crossing with ``|a*| > half_length`` passes
+    round the end ``sign(a*)``: "right" or "left" as :func:`end_side` names it; one with
+    ``|a*| <= half_length`` went "through" the wall (impossible in the scene, possible for a
+    model's prediction); a track that never reaches the other side, or has fewer than two points,
+    is "none".
+
+    Args:
+        track: (T, 2) world positions in order; rows with a NaN (the puck not seen) are skipped.
+        wall: (5,) ``(cx, cy, half_length, half_thickness, angle)``.
+    """
+    points = track[~np.isnan(track).any(axis=-1)]
+    if len(points) < 2:
+        return "none"
+    local = to_wall_frame(points, wall)  # (T', 2)
+    far = np.flatnonzero(local[:, 1] * local[0, 1] < 0)
+    if not len(far):
+        return "none"
+    (a0, n0), (a1, n1) = local[far[0] - 1], local[far[0]]
+    crossing = a0 + (a1 - a0) * n0 / (n0 - n1)
+    return "through" if abs(crossing) <= wall[2] else end_side(crossing, wall)
+
+
+def side_fractions(sides: list[str]) -> dict[str, float | int]:
+    """``count`` and, per entry of :data:`PASSING_SIDES`, the fraction of ``sides`` that are it."""
+    count = len(sides)
+    return {"count": count, **{side: sides.count(side) / count if count else 0.0 for side in PASSING_SIDES}}

@@ -10,19 +10,23 @@ and the one for SSIM may differ); ``mean`` = averaged over samples and clips.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import torch
 from rich.progress import Progress
 from torch import Tensor
 from torch.utils.data import DataLoader, Dataset
 from torchmetrics.functional.image import peak_signal_noise_ratio, structural_similarity_index_measure
 
-from keyin.decode.rules import keyin_keyframes
+from keyin.decode.offsets import offset_keyframes
 from keyin.eval.f1 import keyframe_lists
-from keyin.losses.soft_keyframe import argmax_positions, valid_frame_mask
+from keyin.losses.soft_keyframe import valid_frame_mask
 from keyin.models import KEYIN
-from keyin.viz.keyframes import save_keyframe_pictures
+from keyin.viz.figures import save_labeled_strips
+from keyin.viz.keyframes import marked_frames, save_keyframe_gif, save_keyframe_pictures
 
 PSNR_CAP = 100.0
 """dB, the PSNR of an exact match (MSE 0 gives +inf): means and the best of k stay finite."""
@@ -63,7 +67,9 @@ def device_of(model: KEYIN) -> torch.device:
     return next(model.parameters()).device
 
 
-def predict(model: KEYIN, clips: Tensor, future_length: Tensor, mode: str, sample: bool) -> tuple[Tensor, Tensor]:
+def predict(
+    model: KEYIN, clips: Tensor, future_length: Tensor, mode: str, sample: bool
+) -> tuple[Tensor, list[list[int]]]:
     """A KEYIN (or Jumpy, Static) model's argmax-offset video of each clip and its keyframe positions.
 
     Args:
@@ -72,12 +78,54 @@ def predict(model: KEYIN, clips: Tensor, future_length: Tensor, mode: str, sampl
         future_length: (B,).
         mode, sample: as in :meth:`keyin.models.KEYIN.forward`.
     Returns:
-        (B, L, C, H, W) the conditioning frames then the predicted future; (B, M) keyframe
-        positions (future indices).
+        (B, L, C, H, W) the conditioning frames then the predicted future; per clip the keyframe
+        positions of the argmax offsets (future indices) inside the window, those the video shows.
     """
     clips = clips.to(device_of(model))
     out = model(clips, future_length.to(clips.device), mode=mode, sample=sample)
-    return model.argmax_video(clips, out), argmax_positions(out["offset_probs"])
+    window = torch.full_like(future_length, clips.shape[1] - model.n_cond)
+    return model.argmax_video(clips, out), offset_keyframes(out["offset_probs"], window)
+
+
+@dataclass
+class Futures:
+    """k predicted futures of B clips and how they score against the true futures.
+
+    Attributes:
+        videos: (k, B, L, C, H, W) the conditioning frames, then each prediction (:func:`predict`).
+        keyframes: [k][B] each prediction's keyframe positions (future indices).
+        scores: ``psnr`` and ``ssim``, each (k, B) (:func:`clip_scores`).
+    """
+
+    videos: Tensor
+    keyframes: list[list[list[int]]]
+    scores: dict[str, Tensor]
+
+    def best(self) -> tuple[Tensor, list[list[int]], dict[str, Tensor]]:
+        """Per clip the prediction of the highest PSNR (the first for a clip without valid frames):
+        its video (B, L, C, H, W), keyframes [B] and ``psnr``/``ssim`` (B,)."""
+        index = self.scores["psnr"].nan_to_num(-torch.inf).argmax(0)  # (B,)
+        clips = torch.arange(len(index))
+        keyframes = [self.keyframes[i][clip] for clip, i in enumerate(index.tolist())]
+        return self.videos[index, clips], keyframes, {name: v[index, clips] for name, v in self.scores.items()}
+
+
+def predict_futures(
+    model: KEYIN, clips: Tensor, future_length: Tensor, k: int, mode: str = "prior", sample: bool = True
+) -> Futures:
+    """k predictions of each clip (:func:`predict`; k = 1 with ``sample=False`` for the posterior
+    mean), scored against the clips' true futures over their valid frames.
+
+    Args:
+        clips: (B, L, C, H, W) in [0, 1]; future_length: (B,).
+    """
+    runs = [predict(model, clips, future_length, mode, sample) for _ in range(k)]
+    videos = torch.stack([video for video, _ in runs])  # (k, B, L, C, H, W)
+    n_cond = model.n_cond
+    target = clips[:, n_cond:].to(videos.device)
+    scores = [clip_scores(video[:, n_cond:], target, future_length) for video in videos]
+    stacked = {name: torch.stack([score[name] for score in scores]) for name in METRICS}
+    return Futures(videos, [keyframes for _, keyframes in runs], stacked)
 
 
 def score_batch(model: KEYIN, clips: Tensor, future_length: Tensor, k: int) -> dict[str, Tensor]:
@@ -89,19 +137,20 @@ def score_batch(model: KEYIN, clips: Tensor, future_length: Tensor, k: int) -> d
     Returns:
         ``psnr``/``ssim`` (k, B) of the samples and ``psnr_posterior``/``ssim_posterior`` (B,).
     """
-    n_cond = model.n_cond
-    target = clips[:, n_cond:].to(device_of(model))
+    posterior = predict_futures(model, clips, future_length, 1, "posterior", sample=False)
+    samples = predict_futures(model, clips, future_length, k)
+    return {**samples.scores, **{f"{name}_posterior": posterior.scores[name][0] for name in METRICS}}
 
-    def scores(mode: str, sample: bool) -> dict[str, Tensor]:
-        video, _ = predict(model, clips, future_length, mode, sample)
-        return clip_scores(video[:, n_cond:], target, future_length)
 
-    posterior = scores("posterior", False)
-    samples = [scores("prior", True) for _ in range(k)]
-    return {
-        **{name: torch.stack([sample[name] for sample in samples]) for name in METRICS},
-        **{f"{name}_posterior": posterior[name] for name in METRICS},
-    }
+def sample_summary(scores: dict[str, Tensor]) -> dict[str, float]:
+    """``<metric>_best_of_k`` (per clip the max over samples, averaged over clips) and
+    ``<metric>_mean`` of (k, B) sample scores, clips without valid frames left out."""
+    summary = {}
+    for name in METRICS:
+        samples = scores[name]  # (k, B)
+        summary[f"{name}_best_of_k"] = float(samples.max(0).values.nanmean())
+        summary[f"{name}_mean"] = float(samples.nanmean())
+    return summary
 
 
 def summarize(scores: dict[str, Tensor]) -> dict[str, float | int]:
@@ -111,11 +160,8 @@ def summarize(scores: dict[str, Tensor]) -> dict[str, float | int]:
         ``<metric>_best_of_k`` (per clip the max over samples), ``<metric>_mean``,
         ``<metric>_posterior`` for PSNR and SSIM, and ``k``.
     """
-    summary: dict[str, float | int] = {}
+    summary: dict[str, float | int] = sample_summary(scores)
     for name in METRICS:
-        samples = scores[name]  # (k, B)
-        summary[f"{name}_best_of_k"] = float(samples.max(0).values.nanmean())
-        summary[f"{name}_mean"] = float(samples.nanmean())
         summary[f"{name}_posterior"] = float(scores[f"{name}_posterior"].nanmean())
     summary["k"] = scores["psnr"].shape[0]
     return summary
@@ -141,6 +187,11 @@ def evaluate_video(
     return summarize({name: torch.cat([scores[name] for scores in batches], dim=-1) for name in batches[0]})
 
 
+def first_clips(clips: Dataset, count: int) -> dict[str, Tensor]:
+    """The first ``count`` items of ``clips`` (all if fewer) as one batch."""
+    return next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
+
+
 @torch.no_grad()
 def save_rollouts(model: KEYIN, clips: Dataset, k: int, folder: Path, count: int = 4) -> tuple[Path, Path]:
     """``rollouts.png`` and ``rollouts.gif``: for each of the first ``count`` clips, the truth
@@ -150,24 +201,48 @@ def save_rollouts(model: KEYIN, clips: Dataset, k: int, folder: Path, count: int
     Returns:
         The PNG and GIF paths.
     """
-    batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
+    batch = first_clips(clips, count)
     frames, lengths = batch["frames"].to(device_of(model)), batch["future_length"]
-    n_cond = model.n_cond
-    posterior, _ = predict(model, frames, lengths, "posterior", False)
-    samples = [predict(model, frames, lengths, "prior", True) for _ in range(k)]
-    psnr = torch.stack(
-        [clip_scores(video[:, n_cond:], frames[:, n_cond:], lengths)["psnr"] for video, _ in samples]
-    )  # (k, B)
-    best = psnr.nan_to_num(-torch.inf).argmax(0).tolist()  # per clip; without valid frames the first
-    best_video = torch.stack([samples[index][0][clip] for clip, index in enumerate(best)])
-    best_positions = [samples[index][1][clip].tolist() for clip, index in enumerate(best)]
+    posterior = predict_futures(model, frames, lengths, 1, "posterior", sample=False)
+    best_video, best_keyframes, _ = predict_futures(model, frames, lengths, k).best()
     truth = keyframe_lists(batch["keyframes"])
-    discovered = keyin_keyframes(model, frames, lengths.to(frames.device), "offsets")
-    rows = torch.stack([frames, posterior, best_video], dim=1).flatten(0, 1).cpu()  # (3·count, L, C, H, W)
-    clips_truth = [marks for clip in range(len(best)) for marks in (truth[clip], truth[clip], [])]
+    rows = torch.stack([frames, posterior.videos[0], best_video], dim=1).flatten(0, 1).cpu()  # (3·count, L, C, H, W)
+    clips_truth = [marks for clip in truth for marks in (clip, clip, [])]
     clips_predicted = [
-        marks for clip in range(len(best)) for marks in ([], discovered[clip], best_positions[clip])
+        marks for clip in range(len(truth)) for marks in ([], posterior.keyframes[0][clip], best_keyframes[clip])
     ]
     return save_keyframe_pictures(
-        folder, rows, n_cond, clips_truth, clips_predicted, name="rollouts", per_column=3
+        folder, rows, model.n_cond, clips_truth, clips_predicted, name="rollouts", per_column=3
     )
+
+
+@torch.no_grad()
+def save_prior_samples(
+    model: KEYIN, clips: Dataset, k: int, folder: Path, count: int = 4, name: str = "samples"
+) -> dict[str, Any]:
+    """``<name>.png`` and ``<name>.gif`` (the paper's Fig. 5 and 10): for each of the first ``count``
+    clips the truth (its true keyframes in green), then k futures drawn from the prior given its
+    conditioning frames, each with its own keyframes in red; the PNG labels each sample's PSNR.
+
+    Returns:
+        ``clips``: per pictured clip its index, ``true_keyframes`` and ``samples`` (each sample's
+        ``keyframes``, ``psnr``, ``ssim``); :func:`sample_summary` of the pictured samples; ``k``.
+    """
+    batch = first_clips(clips, count)
+    frames, lengths = batch["frames"].to(device_of(model)), batch["future_length"]
+    samples = predict_futures(model, frames, lengths, k)
+    rows, labels, pictured = [], [], []
+    for clip, truth in enumerate(keyframe_lists(batch["keyframes"])):
+        rows.append(marked_frames(frames[clip], model.n_cond, truth, []))
+        labels.append(f"clip {clip}\nground truth")
+        drawn = []
+        for index, video in enumerate(samples.videos[:, clip]):
+            keyframes = samples.keyframes[index][clip]
+            scores = {metric: float(samples.scores[metric][index, clip]) for metric in METRICS}
+            rows.append(marked_frames(video, model.n_cond, [], keyframes))
+            labels.append(f"sample {index + 1}\nPSNR {scores['psnr']:.1f}")
+            drawn.append({"keyframes": keyframes, **scores})
+        pictured.append({"clip": clip, "true_keyframes": truth, "samples": drawn})
+    save_labeled_strips(rows, labels, Path(folder) / f"{name}.png")
+    save_keyframe_gif(Path(folder) / f"{name}.gif", np.stack(rows), per_column=k + 1)
+    return {"clips": pictured, **sample_summary(samples.scores), "k": k}

@@ -48,6 +48,24 @@ def marked_frames(
     return padded
 
 
+def save_keyframe_gif(path: Path, rows: np.ndarray, per_column: int = 1) -> Path:
+    """An animated GIF of marked clips, one frame per clip index: the clips side by side, or in
+    columns of ``per_column`` consecutive clips.
+
+    Args:
+        rows: (K, L, h, w, 3) uint8, e.g. :func:`marked_frames` of each clip; K divisible by
+            ``per_column``.
+    """
+    n_clips, length, height, width, _ = rows.shape
+    columns = rows.reshape(n_clips // per_column, per_column, length, height, width, 3)
+    movie = columns.transpose(2, 1, 3, 0, 4, 5).reshape(length, per_column * height, -1, 3)
+    scale = max(1, 256 // height)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    iio.imwrite(path, movie.repeat(scale, axis=1).repeat(scale, axis=2), duration=250, loop=0)
+    return path
+
+
 def save_keyframe_pictures(
     folder: Path,
     clips: torch.Tensor,
@@ -57,8 +75,8 @@ def save_keyframe_pictures(
     name: str = "keyframes",
     per_column: int = 1,
 ) -> tuple[Path, Path]:
-    """Write ``<name>.png`` (one row per clip, frames left to right) and ``<name>.gif`` (clips side by
-    side, or in columns of ``per_column``).
+    """Write ``<name>.png`` (one row per clip, frames left to right) and ``<name>.gif``
+    (:func:`save_keyframe_gif`).
 
     Args:
         clips: (K, L, C, H, W) in [0, 1].
@@ -72,14 +90,8 @@ def save_keyframe_pictures(
         [marked_frames(clip, n_cond, t, p) for clip, t, p in zip(clips, truth, predicted, strict=True)]
     )  # (K, L, h, w, 3)
     n_clips, length, height, width, _ = rows.shape
-    strip = rows.transpose(0, 2, 1, 3, 4).reshape(n_clips * height, length * width, 3)
-    columns = rows.reshape(n_clips // per_column, per_column, length, height, width, 3)
-    movie = columns.transpose(2, 1, 3, 0, 4, 5).reshape(length, per_column * height, -1, 3)
-    scale = max(1, 256 // height)
-    movie = movie.repeat(scale, axis=1).repeat(scale, axis=2)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    png, gif = folder / f"{name}.png", folder / f"{name}.gif"
-    iio.imwrite(png, strip)
-    iio.imwrite(gif, movie, duration=250, loop=0)
-    return png, gif
+    png = folder / f"{name}.png"
+    iio.imwrite(png, rows.transpose(0, 2, 1, 3, 4).reshape(n_clips * height, length * width, 3))
+    return png, save_keyframe_gif(folder / f"{name}.gif", rows, per_column)

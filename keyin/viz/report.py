@@ -13,16 +13,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
+from keyin.viz.figures import save_figure, save_labeled_strips  # noqa: E402
 from keyin.viz.keyframes import marked_frames  # noqa: E402
-
-
-def save_figure(fig: plt.Figure, path: Path, dpi: int) -> Path:
-    """Write ``fig`` to ``path`` (creating its folder) and close it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
 
 
 def save_f1_bars(
@@ -76,22 +68,10 @@ def save_method_comparison(
         truth: per clip, true future keyframe indices.
         predicted: method → per clip, its future keyframe indices.
     """
-    methods = list(predicted)
-    n_rows = len(clips) * len(methods)
-    height = clips.shape[-2] + 4
-    fig, axes = plt.subplots(n_rows, 1, figsize=(clips.shape[1] * 0.42, n_rows * 0.55), squeeze=False)
-    for k, clip in enumerate(clips):
-        for m, method in enumerate(methods):
-            frames = marked_frames(clip, n_cond, truth[k], predicted[method][k])[n_cond:]  # (N, h, w, 3)
-            ax = axes[k * len(methods) + m, 0]
-            ax.imshow(np.concatenate(list(frames), axis=1), interpolation="nearest")
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_ylabel(method if m else f"clip {k}\n{method}", rotation=0, ha="right", va="center",
-                          fontsize=7, labelpad=4)
-            ax.set_ylim(height - 0.5, -0.5)
-    fig.subplots_adjust(left=0.12, right=0.995, top=0.995, bottom=0.005, hspace=0.08)
-    return save_figure(fig, path, dpi=110)
+    strips = [marked_frames(clip, n_cond, truth[k], marks[k])[n_cond:] for k, clip in enumerate(clips)
+              for marks in predicted.values()]
+    labels = [method if m else f"clip {k}\n{method}" for k in range(len(clips)) for m, method in enumerate(predicted)]
+    return save_labeled_strips(strips, labels, path)
 
 
 def save_offset_histogram(offsets: torch.Tensor, max_offset: int, path: Path, title: str = "") -> Path:

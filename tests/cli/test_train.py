@@ -144,6 +144,10 @@ def test_eval_with_video_samples_adds_video_metrics_and_rollouts(trained):
     rollouts = iio.imread(root / "video" / "rollouts.png")
     assert rollouts.shape[:2] == (3 * 4 * 36, 35 * 36)  # 4 clips x (truth, posterior, sample), 5 + 30 frames
     assert (root / "video" / "rollouts.gif").is_file()
+    pictured = evaluated["video_pictured"]  # samples.png: the truth, then each of the k samples, of 4 clips
+    assert [len(clip["samples"]) for clip in pictured["clips"]] == [2] * 4 and pictured["k"] == 2
+    assert iio.imread(root / "video" / "samples.png").ndim == 3
+    assert iio.imread(root / "video" / "samples.gif", index=None).shape[0] == 35
 
 
 def test_video_samples_of_a_stage1_checkpoint_give_one_error_line(trained):

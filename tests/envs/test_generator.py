@@ -136,3 +136,14 @@ def test_config_mirrors_the_generator():
     assert config.n_cond == PushingGenerator.n_cond == 1 and config.n_keyframes == 6
     assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR))
     assert instantiate(config.generator) == GENERATOR
+
+
+def test_demos_from_one_layout_start_there_and_go_round_either_end():
+    layout = GENERATOR.demo(0, seed=7)[0].layout
+    demos = GENERATOR.demos_from(layout, 6, seed=3)
+    assert len(demos) == 6 and {demo.side for demo in demos} == {-1, 1}  # seed 3 draws both detours
+    for demo in demos:
+        assert demo.layout is layout and np.allclose(demo.puck[0], layout.start)
+        assert np.linalg.norm(demo.puck[-1] - layout.goal) <= GENERATOR.goal_tolerance
+    again = GENERATOR.demos_from(layout, 6, seed=3)
+    assert all(np.array_equal(a.puck, b.puck) for a, b in zip(demos, again))

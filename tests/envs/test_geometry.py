@@ -8,11 +8,16 @@ import pytest
 
 from keyin.envs.geometry import (
     apply_homography,
+    end_side,
+    from_wall_frame,
+    passing_side,
     plane_homography,
     segment_crosses_box,
     shortest_path,
     shortest_path_length,
+    side_fractions,
     to_wall_frame,
+    top_view_homography,
     wall_corners,
 )
 
@@ -102,3 +107,52 @@ def test_perspective_homography_projects_the_optical_axis_to_the_centre():
     # A point at height 0, 2 units below the camera, offset by tan(22.5 deg) * 2 reaches the top edge.
     edge = apply_homography(homography, np.array([0.2, -0.1 + 2 * np.tan(np.deg2rad(22.5))]))
     assert np.allclose(edge, [32, 0])
+
+
+# Hand-made puck tracks past WALL (|x| <= 0.4 at y = 0), from below (y < 0) to above, and their sides.
+ROUND_THE_RIGHT = np.array([[0.2, -0.5], [0.6, -0.2], [0.6, 0.2], [0.2, 0.5]])
+TRACKS = {
+    "right": ROUND_THE_RIGHT,
+    "left": ROUND_THE_RIGHT * [-1, 1],
+    "through": np.array([[0.0, -0.5], [0.1, -0.1], [0.1, 0.1], [0.0, 0.5]]),
+    "none": np.array([[0.2, -0.5], [0.6, -0.2], [0.6, -0.01]]),  # never reaches the far side
+}
+
+
+@pytest.mark.parametrize("side", TRACKS)
+def test_a_track_passes_the_wall_on_the_side_it_crosses_its_line(side):
+    assert passing_side(TRACKS[side], WALL) == side
+
+
+@pytest.mark.parametrize("angle", [0.35, -0.35])  # the data's walls lean up to 20 degrees either way
+def test_the_side_turns_with_the_wall(angle):
+    wall = np.array([0.1, -0.2, 0.4, 0.03, angle])
+    for side, track in TRACKS.items():
+        assert passing_side(from_wall_frame(track, wall), wall) == side
+
+
+def test_right_is_the_wall_end_at_the_larger_x_whichever_way_the_wall_points():
+    flipped = np.array([0.0, 0.0, 0.4, 0.03, np.pi])  # the same box, its axis pointing to -x
+    assert passing_side(ROUND_THE_RIGHT, flipped) == "right"
+    assert (end_side(1, WALL), end_side(-1, WALL), end_side(1, flipped)) == ("right", "left", "left")
+
+
+def test_the_crossing_is_interpolated_over_frames_without_a_puck():
+    # Between (0.2, -0.5) and (0.7, 0.3) the line y = 0 is crossed at x = 0.2 + 0.5 * 0.5 / 0.8 = 0.51 > 0.4.
+    assert passing_side(np.array([[0.2, -0.5], [np.nan, np.nan], [0.7, 0.3]]), WALL) == "right"
+    # ... and at x = 0.2 + 0.2 * 0.5 / 0.8 = 0.325 <= 0.4: through the wall.
+    assert passing_side(np.array([[0.2, -0.5], [np.nan, np.nan], [0.4, 0.3]]), WALL) == "through"
+    assert passing_side(np.array([[0.2, -0.5], [np.nan, np.nan]]), WALL) == "none"  # one point seen
+
+
+def test_side_fractions_count_every_side():
+    fractions = side_fractions(["left", "right", "right", "none"])
+    assert fractions == {"count": 4, "left": 0.25, "right": 0.5, "through": 0.0, "none": 0.25}
+    assert side_fractions([])["count"] == 0
+
+
+def test_the_top_view_maps_the_table_to_the_image_and_back():
+    homography = top_view_homography(64)
+    points = np.array([[-1.0, 1.0], [1.0, -1.0], [0.5, 0.25]])
+    assert np.allclose(apply_homography(homography, points), [[0, 0], [64, 64], [48, 24]])
+    assert np.allclose(apply_homography(np.linalg.inv(homography), apply_homography(homography, points)), points)

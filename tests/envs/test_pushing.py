@@ -5,7 +5,7 @@ import pytest
 from dm_env import StepType
 
 import keyin.envs
-from keyin.envs.geometry import apply_homography
+from keyin.envs.geometry import apply_homography, top_view_homography
 from keyin.envs.layout import Layout
 from keyin.envs.pushing import PushingPhysics
 from keyin.envs.segmentation import puck_centroid
@@ -148,3 +148,8 @@ def test_a_reset_to_a_moving_state_steps_exactly_like_the_original():
     for env in (original, restored):
         env.step(away)
     np.testing.assert_array_equal(restored.physics.get_state(), original.physics.get_state())
+
+
+def test_the_top_view_without_mujoco_is_the_cameras_homography(env):
+    env.reset()
+    assert np.allclose(top_view_homography(64), env.physics.homography())

@@ -3,9 +3,10 @@
 import math
 
 import imageio.v3 as iio
+import pytest
 import torch
 
-from keyin.eval.video import PSNR_CAP, clip_scores, save_rollouts, score_batch, summarize
+from keyin.eval.video import PSNR_CAP, Futures, clip_scores, save_prior_samples, save_rollouts, score_batch, summarize
 from keyin.models import KEYIN
 from tests.lit.test_keyframe_teacher import keyframe_module
 
@@ -107,3 +108,27 @@ def test_rollouts_show_truth_reconstruction_and_best_sample_per_clip(tmp_path):
     assert iio.imread(png).shape == (3 * 2 * 68, 6 * 68, 3)  # a row per clip and kind, 2-pixel borders
     movie = iio.imread(gif, index=None)
     assert movie.shape[:3] == (6, 3 * 68 * 3, 2 * 68 * 3)  # each clip's three rows in one column, 3x
+
+
+def test_the_best_future_of_each_clip_is_its_highest_psnr():
+    videos = torch.arange(3.0).view(3, 1, 1, 1, 1, 1).expand(3, 2, 1, 1, 1, 1)  # sample i is all i
+    psnr = torch.tensor([[10.0, float("nan")], [30.0, float("nan")], [20.0, float("nan")]])
+    futures = Futures(videos, [[[i], [i + 10]] for i in range(3)], {"psnr": psnr, "ssim": -psnr})
+    video, keyframes, scores = futures.best()
+    assert video.flatten().tolist() == [1.0, 0.0]  # clip 1 has no valid frames: the first sample
+    assert keyframes == [[1], [10]] and scores["psnr"][0] == 30.0 and scores["ssim"][0] == -30.0
+
+
+def test_prior_samples_picture_the_truth_and_k_samples_per_clip(tmp_path):
+    keyframes = torch.zeros(2, 4, dtype=torch.bool)
+    keyframes[:, 2] = True
+    clips = [dict(frames=f, future_length=n, keyframes=k) for f, n, k in zip(rgb_clips(), LENGTHS, keyframes)]
+    torch.manual_seed(0)
+    pictured = save_prior_samples(rgb_model(), clips, k=3, folder=tmp_path, name="fig")
+    assert [clip["true_keyframes"] for clip in pictured["clips"]] == [[2], [2]]
+    assert [len(clip["samples"]) for clip in pictured["clips"]] == [3, 3] and pictured["k"] == 3
+    best = max(sample["psnr"] for sample in pictured["clips"][0]["samples"])
+    assert pictured["psnr_best_of_k"] == pytest.approx((best + max(s["psnr"] for s in pictured["clips"][1]["samples"])) / 2)
+    movie = iio.imread(tmp_path / "fig.gif", index=None)
+    assert movie.shape[:3] == (6, 4 * 68 * 3, 2 * 68 * 3)  # each clip's truth and 3 samples in one column, 3x
+    assert iio.imread(tmp_path / "fig.png").ndim == 3

@@ -53,3 +53,27 @@ def test_plan_pictures_put_each_subgoal_over_the_frame_that_last_pursued_it(tmp_
     assert bottom == [round(0.65 * 10), round(0.65 * 30), 255, round(0.65 * 60), round(0.65 * 60)]
     movie = iio.imread(gif, index=None)
     assert movie.shape[0] == 6 and movie.shape[2] > movie.shape[1]  # a frame beside its subgoal, per step
+
+
+def test_labelled_strips_take_one_label_per_strip(tmp_path):
+    import pytest
+
+    from keyin.viz.figures import save_labeled_strips
+    from keyin.viz.report import save_method_comparison
+
+    strips = [marked_frames(torch.rand(5, 3, 8, 8), 2, [0], [1]) for _ in range(3)]
+    assert iio.imread(save_labeled_strips(strips, ["a", "b", "c\nd"], tmp_path / "strips.png")).ndim == 3
+    with pytest.raises(ValueError, match="one label per strip"):
+        save_labeled_strips(strips, ["a"], tmp_path / "bad.png")
+    path = save_method_comparison(torch.rand(2, 5, 1, 8, 8), 2, [[0], [1]], {"a": [[0], []], "b": [[1], [2]]}, tmp_path / "m.png")
+    assert iio.imread(path).ndim == 3
+
+
+def test_trajectories_are_drawn_over_the_scene(tmp_path):
+    from keyin.viz.figures import save_trajectories
+
+    tracks = [np.array([[10.0, 50.0], [np.nan, np.nan], [30.0, 10.0]]), np.array([[10.0, 50.0], [50.0, 12.0]])]
+    wall = np.array([[20.0, 30.0], [44.0, 30.0], [44.0, 32.0], [20.0, 32.0]])
+    background = np.full((64, 64, 3), 200, np.uint8)
+    path = save_trajectories(background, wall, tracks[0][0], {"demos": tracks, "samples": tracks[:1]}, tmp_path / "t.png")
+    assert iio.imread(path).shape[1] > iio.imread(path).shape[0]  # two panels side by side
