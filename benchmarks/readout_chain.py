@@ -1,5 +1,6 @@
 """KEYIN's argmax-offset readout with the offset evidence chained softly (as trained) or along the
-argmax path (each previous keyframe where the argmax offsets put it), beside the boundary rule.
+argmax path (each previous keyframe where the argmax offsets put it), the jointly most likely
+offsets (Viterbi over the same δ), beside the boundary rule.
 
     python benchmarks/readout_chain.py runs/<run>/checkpoints/keyframes/last.ckpt --clips 1000 --split val \
         --out benchmarks/results/readout_chain_<dataset>.md
@@ -18,7 +19,7 @@ from pathlib import Path
 import torch
 
 from common import cpu_model, publish, split_batch
-from keyin.decode.offsets import offset_keyframes
+from keyin.decode.offsets import joint_offset_keyframes, offset_keyframes
 from keyin.decode.rules import boundary_keyframes, with_sequence_ends
 from keyin.eval.f1 import column_scores, keyframe_lists
 from keyin.lit.checkpoints import load_checkpoint, load_trained_module
@@ -47,6 +48,9 @@ def main() -> None:
         if chain == "soft" and keys.boundary_scores is not None:
             interior = boundary_keyframes(keys.boundary_scores, lengths, model.predictor.n_keyframes, model.predictor.max_offset)
             readouts["boundaries"] = with_sequence_ends(interior, lengths, n_future)
+            mask = torch.arange(n_future) < lengths[:, None]
+            table = model.predictor.offset_log_probs(keys.head_logits, keys.boundary_scores, mask)
+            readouts["jointly most likely offsets (Viterbi)"] = joint_offset_keyframes(table, lengths)
         seconds = time.perf_counter() - started
         for label, predicted in readouts.items():
             s = column_scores(predicted, truth, lengths.tolist(), n_future)
