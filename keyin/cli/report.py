@@ -73,9 +73,16 @@ def job_data_dir(job: Path, data_dir: str) -> Path:
     return Path(OmegaConf.load(hydra_file).hydra.runtime.cwd) / data_dir
 
 
+def job_config(job: Path) -> Path:
+    """A job's composed config: Hydra's ``.hydra/config.yaml`` in a run dir, or the ``config.yaml``
+    that keyin-reproduce copied beside its metrics.json."""
+    hydra_file = job / ".hydra" / "config.yaml"
+    return hydra_file if hydra_file.is_file() else job / "config.yaml"
+
+
 def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
     """The first ``count`` test clips of the job's dataset, rebuilt from its saved Hydra config."""
-    cfg = OmegaConf.load(job / ".hydra" / "config.yaml")
+    cfg = OmegaConf.load(job_config(job))
     dataset = cfg.dataset
     clips = split_clips(dataset, instantiate(dataset.generator), "test", None, job_data_dir(job, cfg.data_dir))
     frames = torch.stack([clips[i]["frames"] for i in range(min(count, len(clips)))])
@@ -152,7 +159,7 @@ def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
     ))
     for dataset in sorted({row.dataset for row in rows}):
         job, predicted, truth = example_predictions(records, dataset)
-        if not predicted or not (job / ".hydra" / "config.yaml").is_file():
+        if not predicted or not job_config(job).is_file():
             continue
         clips, n_cond = example_clips(job, min(n_examples, len(truth)))
         predicted = {method: per_clip[: len(clips)] for method, per_clip in predicted.items()}

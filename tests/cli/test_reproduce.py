@@ -31,6 +31,7 @@ def test_one_command_writes_every_jobs_small_files_and_the_report(tmp_path):
     again = run("reproduce", *TINY_TABLE, "steps=[report]", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert (tmp_path / "results" / "table1.md").read_text().split("\n")[3:] == table.split("\n")[3:]
+    assert (tmp_path / "results" / "examples_brownian.png").is_file()  # from the copied config.yaml
 
 
 def test_a_dry_run_prints_the_commands_and_runs_none(tmp_path):
