@@ -173,9 +173,10 @@ def path_cost(costs: Tensor, positions: list[list[int]]) -> Tensor:
 
 
 def segmentation_offsets(
-    positions: list[list[int]], lengths: list[int], n_keyframes: int, max_offset: int
+    positions: list[list[int]], lengths: list[int], n_keyframes: int, max_offset: int, leave: bool = False
 ) -> Tensor:
-    """Teacher offsets of the keyframes at given interior positions, and of the one that leaves the clip.
+    """Teacher offsets of the keyframes at given interior positions (and, with ``leave``, of the one
+    that leaves the clip).
 
     Args:
         positions: per clip, increasing interior keyframe positions (as from
@@ -183,17 +184,18 @@ def segmentation_offsets(
         lengths: per clip, its valid future frames.
         n_keyframes: M.
         max_offset: S.
+        leave: also teach the keyframe after the last interior one the offset that puts it just past
+            the clip's last valid frame (where the argmax readout drops it), where S allows; without
+            it, where the chain goes after the last interior keyframe is left to the soft loss (the
+            gap closing at the last frame is no keyframe: the last frame is never one).
     Returns:
-        (B, M) int64 offsets in 1…S: the interior keyframes', then the offset that puts the next
-        keyframe just past the clip's last valid frame (where the argmax readout drops it: a keyframe
-        on the last frame would be a false positive, since the last frame is never one), where S
-        allows; ``IGNORE_OFFSET`` for the rest.
+        (B, M) int64 offsets in 1…S; ``IGNORE_OFFSET`` for the keyframes without a target.
     """
     offsets = torch.full((len(positions), n_keyframes), IGNORE_OFFSET, dtype=torch.long)
     for b, (row, length) in enumerate(zip(positions, lengths)):
         interior = [gap for _, gap in _gaps(row, length)][: min(len(row), n_keyframes)]
         leaving = length + 1 - (row[len(interior) - 1] + 1 if interior else 0)  # to extended index length + 1
-        if len(interior) < n_keyframes and leaving <= max_offset:
+        if leave and len(interior) < n_keyframes and leaving <= max_offset:
             interior.append(leaving)
         offsets[b, : len(interior)] = torch.tensor(interior, dtype=torch.long)
     return offsets

@@ -13,14 +13,15 @@ import torch
 from torch import Tensor
 
 from keyin.decode.segment_costs import embedding_costs
-from keyin.decode.segmentation import decode_by_length, segmentation_offsets
+from keyin.decode.segmentation import KeyframeCost, decode_by_length, segmentation_offsets
 from keyin.losses.soft_keyframe import boundary_teacher_loss, offset_teacher_loss
 from keyin.models.keyin import KEYIN
 
 
 @torch.no_grad()
 def segmentation_targets(
-    interpolator: torch.nn.Module, boundary_emb: Tensor, lengths: Tensor, n_keyframes: int, keyframe_cost: float = 0.0
+    interpolator: torch.nn.Module, boundary_emb: Tensor, lengths: Tensor, n_keyframes: int,
+    keyframe_cost: KeyframeCost = 0.0, leave: bool = False,
 ) -> tuple[Tensor, Tensor]:
     """Teacher offsets and boundary labels of clips, each segmented within its own valid frames.
 
@@ -29,7 +30,8 @@ def segmentation_targets(
         boundary_emb: (B, N + 1, E) embeddings on the extended index (K^0, then the future frames).
         lengths: (B,) valid future frames.
         n_keyframes: M.
-        keyframe_cost: price per keyframe in the DP (0: every gap it may).
+        keyframe_cost: price per keyframe in the DP (0: every gap it may; "knee": each clip's knee count).
+        leave: teach the keyframe after the last interior one to leave the clip (``segmentation_offsets``).
     Returns:
         offsets (B, M) int64 (:func:`keyin.decode.segmentation.segmentation_offsets`) and
         boundaries (B, N) float, 1 at the interior keyframes; both on ``boundary_emb``'s device.
@@ -42,13 +44,13 @@ def segmentation_targets(
     boundaries = torch.zeros(len(positions), n_future)
     for row, clip_positions in enumerate(positions):
         boundaries[row, clip_positions] = 1.0
-    offsets = segmentation_offsets(positions, lengths.tolist(), n_keyframes, interpolator.max_offset)
+    offsets = segmentation_offsets(positions, lengths.tolist(), n_keyframes, interpolator.max_offset, leave)
     return offsets.to(boundary_emb.device), boundaries.to(boundary_emb.device)
 
 
 def teacher_loss(
     model: KEYIN, clips: Tensor, out: dict[str, Tensor | None], future_length: Tensor,
-    keyframe_cost: float = 0.0, n_clips: int = 0, chained: bool = False,
+    keyframe_cost: KeyframeCost = 0.0, n_clips: int = 0, chained: bool = False, leave: bool = False,
 ) -> Tensor:
     """Cross-entropy of δ (and, where the model has boundary scores, of those) to the
     :func:`segmentation_targets` of the first ``n_clips`` clips (0: all).
@@ -68,7 +70,8 @@ def teacher_loss(
     n_clips = n_clips or out["boundary_emb"].shape[0]
     lengths = future_length[:n_clips]
     offsets, boundaries = segmentation_targets(
-        model.interpolator, out["boundary_emb"][:n_clips].detach(), lengths, model.predictor.n_keyframes, keyframe_cost
+        model.interpolator, out["boundary_emb"][:n_clips].detach(), lengths, model.predictor.n_keyframes, keyframe_cost,
+        leave,
     )
     logits = out["offset_logits"][:n_clips]
     if chained:

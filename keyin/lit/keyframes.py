@@ -51,8 +51,9 @@ class KeyframeModule(L.LightningModule):
         teacher_clips: int = 0,
         offset_evidence: bool = False,
         discovery: str = "offsets",
-        teacher_keyframe_cost: float = 0.0,
+        teacher_keyframe_cost: float | str = 0.0,  # nats per keyframe in the teacher's DP, or "knee"
         teacher_chain: bool = False,  # teacher forcing of the previous keyframe's position (decode/teacher.py)
+        teacher_leaves: bool = False,  # the teacher also says where the chain leaves the clip
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
     ) -> None:
@@ -107,7 +108,8 @@ class KeyframeModule(L.LightningModule):
         )
         if stage == "train" and hp.teacher_weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
             terms["teacher"] = teacher_loss(
-                self.model, clips, out, future_length, hp.teacher_keyframe_cost, hp.teacher_clips, hp.teacher_chain
+                self.model, clips, out, future_length, hp.teacher_keyframe_cost, hp.teacher_clips, hp.teacher_chain,
+                hp.teacher_leaves,
             )
             terms["loss"] = terms["loss"] + hp.teacher_weight * terms["teacher"]
             self.log("train/teacher", terms["teacher"])

@@ -74,7 +74,9 @@ def test_interpolation_costs_match_direct_decoding():
 
 
 def test_segmentation_offsets_teach_the_interior_keyframes_then_leaving_the_clip():
-    offsets = segmentation_offsets([[3, 8], [1, 5, 9], [], [2, 5]], [12, 12, 6, 12], n_keyframes=3, max_offset=5)
+    plain = segmentation_offsets([[3, 8], [1, 5, 9], [], [2, 5]], [12, 12, 6, 12], n_keyframes=3, max_offset=5)
+    assert plain[0].tolist() == [4, 5, IGNORE_OFFSET] and plain[1].tolist() == [2, 4, 4]  # interior only
+    offsets = segmentation_offsets([[3, 8], [1, 5, 9], [], [2, 5]], [12, 12, 6, 12], 3, 5, leave=True)
     # extended indices 4 and 9, then 13 = just past frame 11 (not the closing gap's 12: the last frame)
     assert offsets[0].tolist() == [4, 5, 4]
     assert offsets[1].tolist() == [2, 4, 4]  # all M keyframes are interior: none is left to leave

@@ -13,7 +13,7 @@ STAGE1 = dict(
 
 def keyframe_module(
     teacher_weight: float, offset_evidence: bool = False, discovery: str = "offsets", teacher_chain: bool = False,
-    **sizes: int,
+    teacher_leaves: bool = False, **sizes: int,
 ) -> KeyframeModule:
     """A small stage-2 module; ``sizes`` override STAGE1's (e.g. image_size, channels)."""
     torch.manual_seed(0)
@@ -22,7 +22,7 @@ def keyframe_module(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,
-        offset_evidence=offset_evidence, discovery=discovery, teacher_chain=teacher_chain,
+        offset_evidence=offset_evidence, discovery=discovery, teacher_chain=teacher_chain, teacher_leaves=teacher_leaves,
     )
     module.log = module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     return module
@@ -103,3 +103,12 @@ def test_the_chained_teacher_scores_delta_read_along_the_teachers_own_path():
     unchained = keyframe_module(10.0, offset_evidence=True)
     torch.manual_seed(5)
     assert not torch.isclose(unchained._shared_step(data, "train")["teacher"], expected)
+
+
+def test_a_leaving_teacher_adds_the_offset_out_of_the_clip_to_its_targets():
+    data = batch()
+    torch.manual_seed(5)
+    plain = keyframe_module(10.0, offset_evidence=True)._shared_step(data, "train")["teacher"]
+    torch.manual_seed(5)
+    leaving = keyframe_module(10.0, offset_evidence=True, teacher_leaves=True)._shared_step(data, "train")["teacher"]
+    assert not torch.isclose(plain, leaving)
