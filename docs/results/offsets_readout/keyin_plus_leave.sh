@@ -1,4 +1,5 @@
 #!/bin/sh
+# (The row "price 25 nats, interior only" ran this script from /work/run-tree2, main at d84b8f5, before the leaving teacher existed.)
 # Issue 26 item 2: keyin_plus whose teacher also teaches the keyframe after the last interior one to
 # leave the clip (keyin 0.2, run-tree3 = main at the commit of that change); stage 2 only on the Brownian
 # Table 1 sweep's stage 1 of seed 0; $1 = extra overrides' label, rest = overrides. No test scoring
