@@ -15,12 +15,11 @@ import argparse
 import itertools
 import time
 from datetime import date
-from pathlib import Path
 
 import numpy as np
 import torch
 
-from common import cpu_model, publish, split_batch
+from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.changepoint import COSTS, SIGNALS, ChangepointKeyframes
 from keyin.eval.f1 import column_scores, keyframe_lists
 
@@ -28,14 +27,10 @@ PENALTIES = [float(p) for p in np.round(np.logspace(-2, 5, 15), 4)]
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=300)
     parser.add_argument("--dataset", default="brownian")
-    parser.add_argument("--clips", type=int, default=300)
-    parser.add_argument("--split", default="val")
-    parser.add_argument("--data-dir", default="data")
     parser.add_argument("--signals", nargs="+", default=list(SIGNALS), choices=SIGNALS)
     parser.add_argument("--costs", nargs="+", default=list(COSTS), choices=COSTS)
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     dataset, batch = split_batch(args.dataset, args.split, args.clips, args.data_dir)
     truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()

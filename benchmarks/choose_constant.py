@@ -12,20 +12,15 @@ from __future__ import annotations
 
 import argparse
 from datetime import date
-from pathlib import Path
 
-from common import cpu_model, publish, split_batch
+from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.baselines import ConstantKeyframes
 from keyin.eval.f1 import column_scores, keyframe_lists
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=1000)
     parser.add_argument("--dataset", default="brownian")
-    parser.add_argument("--clips", type=int, default=1000)
-    parser.add_argument("--split", default="val")
-    parser.add_argument("--data-dir", default="data")
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     dataset, batch = split_batch(args.dataset, args.split, args.clips, args.data_dir)
     truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()

@@ -20,7 +20,7 @@ from pathlib import Path
 import torch
 from torch.utils.data import DataLoader, Subset
 
-from common import cpu_model, publish
+from common import clip_arguments, cpu_model, publish
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.decode.rules import with_sequence_ends
@@ -38,14 +38,10 @@ def price(text: str) -> float | str:
 
 @torch.no_grad()
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=300)
     parser.add_argument("ckpt", help="a stage-2 (keyframes) checkpoint")
-    parser.add_argument("--clips", type=int, default=300)
-    parser.add_argument("--split", default="val")
-    parser.add_argument("--data-dir", default="data")
     parser.add_argument("--costs", type=price, nargs="+", default=[0, 50, 100, 200, 400, KNEE])
     parser.add_argument("--weights", type=float, nargs="+", default=[0, 5, 10, 20])
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     module, config = load_trained_module(args.ckpt, "keyframes")
     dataset, stage1 = config["dataset"], module.hparams.stage1

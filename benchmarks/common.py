@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import platform
 import subprocess
 from pathlib import Path
@@ -31,6 +32,16 @@ def publish(report: str, out: Path | None) -> None:
     if out:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(report)
+
+
+def clip_arguments(parser: argparse.ArgumentParser, clips: int) -> argparse.ArgumentParser:
+    """The options every script on a split's clips takes: ``--clips``, ``--split`` (default ``val``:
+    choices are made on validation clips, never on the test set), ``--data-dir`` and ``--out``."""
+    parser.add_argument("--clips", type=int, default=clips)
+    parser.add_argument("--split", default="val")
+    parser.add_argument("--data-dir", default="data")
+    parser.add_argument("--out", type=Path)
+    return parser
 
 
 def split_batch(dataset_name: str, split: str, clips: int, data_dir: str) -> tuple[Any, dict[str, Any]]:

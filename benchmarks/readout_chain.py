@@ -14,11 +14,10 @@ from __future__ import annotations
 import argparse
 import time
 from datetime import date
-from pathlib import Path
 
 import torch
 
-from common import cpu_model, publish, split_batch
+from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.offsets import joint_offset_keyframes, offset_keyframes
 from keyin.decode.rules import boundary_keyframes, with_sequence_ends
 from keyin.eval.f1 import column_scores, keyframe_lists
@@ -27,12 +26,8 @@ from keyin.lit.checkpoints import load_checkpoint, load_trained_module
 
 @torch.no_grad()
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=1000)
     parser.add_argument("ckpt", help="a stage-2 (keyframes) checkpoint")
-    parser.add_argument("--clips", type=int, default=1000)
-    parser.add_argument("--split", default="val")
-    parser.add_argument("--data-dir", default="data")
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     module, config = load_trained_module(args.ckpt, "keyframes")
     model, name = module.model.eval(), config["dataset"]["name"]
