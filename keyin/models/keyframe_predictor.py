@@ -195,6 +195,15 @@ class KeyframePredictor(nn.Module):
         logits[self.fixed_offset - 1] = 0.0
         return logits.expand(batch_size, self.n_keyframes, -1)
 
+    def _extended_scores(self, scores: Tensor, mask: Tensor, length: int) -> tuple[Tensor, Tensor]:
+        """Boundary logits on the extended index (index k = future position k - 1; K^0 and every
+        position past the clip score ``beyond_score``), (B, length), and their
+        ``Σ_{i≤j} log(1 - p[i])``, (B, length)."""
+        frame_scores = torch.where(mask, scores, self.beyond_score)  # (B, N)
+        extended = self.beyond_score.expand(scores.shape[0], length).clone()
+        extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
+        return extended, F.logsigmoid(-extended).cumsum(-1)
+
     def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor, chain: Chain = "soft") -> Tensor:
         """Offset logits plus the log-probability that offset a + 1 reaches the *first* boundary.
 
@@ -215,10 +224,7 @@ class KeyframePredictor(nn.Module):
         """
         batch, n_keys, max_offset = offset_logits.shape
         n_ext = n_keys * max_offset + 1
-        frame_scores = torch.where(mask, scores, self.beyond_score)  # (B, N)
-        extended = self.beyond_score.expand(batch, n_ext).clone()  # (B, L_ext): index k = position k - 1
-        extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
-        none_through = F.logsigmoid(-extended).cumsum(-1)  # Σ_{i≤j} log(1 - p[i])
+        extended, none_through = self._extended_scores(scores, mask, n_ext)
         # log p[j] + Σ_{i<j} log(1 - p[i]); the Σ_{i≤k} part is removed per previous position below.
         first_at = F.logsigmoid(extended) + F.pad(none_through[:, :-1], (1, 0))
         previous_pos = initial_position(batch, n_ext, offset_logits)  # D^0
@@ -247,12 +253,9 @@ class KeyframePredictor(nn.Module):
             (B, M, L_ext, S): entry [b, t, k, a] is log δ^{t+1}(offset a + 1) with keyframe t at
             extended index k (L_ext = M·S + 1; rows k that no path reaches are finite but unused).
         """
-        batch, n_keys, max_offset = head_logits.shape
+        _, n_keys, max_offset = head_logits.shape
         n_ext = n_keys * max_offset + 1
-        frame_scores = torch.where(mask, scores, self.beyond_score)
-        extended = self.beyond_score.expand(batch, n_ext + max_offset).clone()  # room past the last reachable index
-        extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
-        none_through = F.logsigmoid(-extended).cumsum(-1)  # Σ_{i≤j} log(1 - p[i])
+        extended, none_through = self._extended_scores(scores, mask, n_ext + max_offset)  # room past the last reachable index
         k = torch.arange(n_ext)[:, None]
         a = torch.arange(max_offset)[None]
         # log p[k+a+1] + Σ_{k<i≤k+a} log(1 - p[i])
