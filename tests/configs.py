@@ -11,4 +11,4 @@ OLD_SMOKE = ("backbone=ours", "backbone.norm=batch", "backbone.foreground_weight
 OLD_SMOKE_TWO_STAGES = (*OLD_SMOKE, "model.keyframes.teacher_keyframe_cost=25.0")
 # keyin 0.1's `keyin-train scale=smoke` (model=keyin then was today's keyin_plus).
 OLD_SMOKE_KEYIN = ("model=keyin_plus", *OLD_SMOKE_TWO_STAGES, "model.keyframes.teacher_weight=1.0",
-                   "model.keyframes.discovery=offsets")
+                   "model.keyframes.discovery=offsets", "model.keyframes.teacher_leaves=false")

@@ -22,6 +22,8 @@ OLD_COMMANDS = json.loads((Path(__file__).parent / "reference" / "old_commands.j
 # The old presets priced keyframes at 120 nats on pushing outside scale=cpu (read only by discovery=map).
 OLD_PUSHING_PRICE = ("model.keyframes.map_keyframe_cost=120.0",)
 OLD_CONSTANT_OFFSET = {"brownian": 6, "pushing": 4}
+# keyin 0.1's teacher had no price per keyframe (outside scale=smoke) and taught interior keyframes only.
+OLD_TEACHER = ("model.keyframes.teacher_keyframe_cost=0.0", "model.keyframes.teacher_leaves=false")
 
 
 def new_model(scale: str, model: str) -> str:
@@ -37,6 +39,8 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
         overrides.append("backbone=ours")  # the old cpu preset's frame model; keyin_plus picks it itself
     if scale == "smoke":
         overrides += OLD_SMOKE_KEYIN if model == "keyin" else OLD_SMOKE_TWO_STAGES if trains_two_stages else OLD_SMOKE
+    if new_model(scale, model) == "keyin_plus" and scale != "smoke":
+        overrides += OLD_TEACHER
     if scale != "cpu" and dataset == "pushing" and trains_two_stages:
         overrides += OLD_PUSHING_PRICE
     if model == "constant":  # keyin 0.1's fixed spacings; today's is chosen on validation clips
