@@ -13,7 +13,8 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_int_at_least, require_positive_int
 from keyin.data.clips import ShardClips
-from keyin.data.hdf5 import split_files
+from keyin.data.hdf5 import read_manifest, split_files
+from keyin.data.imports import clip_origins
 from keyin.errors import ConfigError
 from keyin.decode.rules import SegmentationDiscoverer
 from keyin.eval.discovery import score_methods
@@ -37,6 +38,22 @@ def eval_clips(cfg: DictConfig, dataset: DictConfig) -> ShardClips:
     )
 
 
+def clip_videos(cfg: DictConfig, dataset: DictConfig) -> list[str] | None:
+    """Per clip, the video keyin-import cut it from (None: generated clips, or a single file)."""
+    folder = Path(cfg.data_dir) / dataset.name
+    if cfg.data is not None or "sources" not in read_manifest(folder):
+        return None
+    return [origin.video for origin in clip_origins(folder, cfg.split)]
+
+
+def check_tolerances(cfg: DictConfig) -> list[int]:
+    """``tolerances``: the k of each ±k F1, integers >= 0."""
+    values = OmegaConf.to_container(cfg.tolerances) if OmegaConf.is_list(cfg.tolerances) else cfg.tolerances
+    if not isinstance(values, list) or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in values):
+        raise ConfigError(f"tolerances={values!r} must be a list of frame counts >= 0, e.g. tolerances=[1,2]")
+    return values
+
+
 def check_video_samples(cfg: DictConfig, stage: str | None) -> None:
     """``video_samples``: 0 (off), or a count of prior samples for a stage-2 checkpoint."""
     require_int_at_least(cfg.video_samples, "video_samples", 0)
@@ -53,6 +70,7 @@ def check_video_samples(cfg: DictConfig, stage: str | None) -> None:
 def evaluate(cfg: DictConfig) -> dict:
     check_common(cfg)
     require_positive_int(cfg.batch_size, "batch_size")
+    tolerances = check_tolerances(cfg)
     if cfg.ckpt is not None:
         module, trained = load_trained_module(cfg.ckpt, stage=None)
         check_video_samples(cfg, module.stage)
@@ -75,7 +93,9 @@ def evaluate(cfg: DictConfig) -> dict:
         discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
     clips = eval_clips(cfg, dataset)
     loader = dict(batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress)
-    metrics = score_methods(discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), **loader)
+    metrics = score_methods(
+        discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), tolerances, clip_videos(cfg, dataset), **loader
+    )
     if cfg.video_samples:
         torch.manual_seed(cfg.seed)  # the prior samples
         metrics["video"] = evaluate_video(module.model, clips, cfg.video_samples, **loader)

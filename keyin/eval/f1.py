@@ -2,8 +2,9 @@
 
 Keyframes are sets of future-frame indices per clip. The primary score is micro F1 over the test
 set, ``2·ΣTP / (Σ|P| + Σ|G|)``, with exact index matches. Secondary: macro F1 (mean per-clip F1),
-F1 with a ±1 tolerance under one-to-one matching, and the mean distance from each prediction to
-the nearest ground-truth keyframe.
+F1 with a ±k tolerance under one-to-one matching, the mean distance from each prediction to the
+nearest ground-truth keyframe, the mean Hausdorff distance between a clip's two sets, and the
+scores per video (a video's clips pooled).
 """
 
 from __future__ import annotations
@@ -35,6 +36,18 @@ def tolerant_matches(predicted: Sequence[int], truth: Sequence[int], tolerance: 
     return matches
 
 
+def hausdorff(predicted: Sequence[int], truth: Sequence[int], n_future: int) -> float:
+    """The Hausdorff distance between two sets of future indices: the farthest any keyframe of one
+    set is from the nearest of the other. Two empty sets are 0 apart; an empty set is ``n_future``
+    (the clip's length, farther than any two indices) from a non-empty one."""
+    if not predicted and not truth:
+        return 0.0
+    if not predicted or not truth:
+        return float(n_future)
+    gaps = np.abs(np.subtract.outer(np.asarray(predicted), np.asarray(truth)))
+    return float(max(gaps.min(axis=1).max(), gaps.min(axis=0).max()))
+
+
 def keyframe_lists(keyframes: torch.Tensor) -> list[list[int]]:
     """Per clip, the indices of a (B, N) bool keyframe mask, in order."""
     return [row.nonzero().flatten().tolist() for row in keyframes]
@@ -45,7 +58,7 @@ def _f1(tp: float, n_pred: float, n_true: float) -> float:
 
 
 def keyframe_scores(
-    predicted: Iterable[Iterable[int]], truth: Iterable[Iterable[int]], n_future: int
+    predicted: Iterable[Iterable[int]], truth: Iterable[Iterable[int]], n_future: int, tolerances: Sequence[int] = (1,)
 ) -> dict[str, float]:
     """Keyframe F1 and companions over a set of clips.
 
@@ -54,22 +67,27 @@ def keyframe_scores(
             [0, n_future) are dropped (a keyframe past the clip is no prediction).
         truth: per clip, ground-truth future indices.
         n_future: N, the number of future frames.
+        tolerances: the k of each ±k F1 (``f1_tol1`` is always scored).
     Returns:
-        f1, precision, recall (micro, exact), f1_macro, f1_tol1, mean_distance (mean over
-        predictions of the distance to the nearest truth; NaN if none), n_sequences,
-        n_predicted, n_true (per clip means).
+        f1, precision, recall (micro, exact), f1_macro, f1_tol<k> for each k, mean_distance (mean
+        over predictions of the distance to the nearest truth; NaN if none), hausdorff (mean over
+        clips of :func:`hausdorff`), n_sequences, n_predicted, n_true (per clip means).
     """
-    tp = tp1 = n_pred = n_true = 0
-    per_clip, distances, n_clips = [], [], 0
+    ks = sorted({1, *(int(k) for k in tolerances)})
+    tp = n_pred = n_true = 0
+    tolerant = dict.fromkeys(ks, 0)
+    per_clip, distances, apart, n_clips = [], [], [], 0
     for pred_clip, true_clip in zip(predicted, truth, strict=True):
-        preds = {int(p) for p in pred_clip if 0 <= int(p) < n_future}
-        trues = {int(g) for g in true_clip}
-        hits = len(preds & trues)
+        preds = sorted({int(p) for p in pred_clip if 0 <= int(p) < n_future})
+        trues = sorted({int(g) for g in true_clip})
+        hits = len(set(preds) & set(trues))
         tp, n_pred, n_true = tp + hits, n_pred + len(preds), n_true + len(trues)
-        tp1 += tolerant_matches(list(preds), list(trues), tolerance=1)
+        for k in ks:
+            tolerant[k] += tolerant_matches(preds, trues, tolerance=k)
         per_clip.append(_f1(hits, len(preds), len(trues)))
+        apart.append(hausdorff(preds, trues, n_future))
         if trues:
-            true_array = np.fromiter(trues, dtype=int)
+            true_array = np.asarray(trues)
             distances.extend(np.abs(true_array - p).min() for p in preds)
         n_clips += 1
     return {
@@ -77,11 +95,28 @@ def keyframe_scores(
         "precision": tp / n_pred if n_pred else 0.0,
         "recall": tp / n_true if n_true else 0.0,
         "f1_macro": float(np.mean(per_clip)) if per_clip else float("nan"),
-        "f1_tol1": _f1(tp1, n_pred, n_true),
+        **{f"f1_tol{k}": _f1(tolerant[k], n_pred, n_true) for k in ks},
         "mean_distance": float(np.mean(distances)) if distances else float("nan"),
+        "hausdorff": float(np.mean(apart)) if apart else float("nan"),
         "n_sequences": n_clips,
         "n_predicted": n_pred / max(n_clips, 1),
         "n_true": n_true / max(n_clips, 1),
+    }
+
+
+def video_scores(
+    predicted: Sequence[Sequence[int]], truth: Sequence[Sequence[int]], videos: Sequence[str], n_future: int
+) -> dict[str, dict[str, float]]:
+    """:func:`keyframe_scores` of each video's clips pooled (``videos``: per clip, its video), in
+    the order the videos first appear."""
+    if len(videos) != len(predicted):
+        raise ValueError(f"{len(videos)} video names for {len(predicted)} clips")
+    clips: dict[str, list[int]] = {}
+    for index, video in enumerate(videos):
+        clips.setdefault(str(video), []).append(index)
+    return {
+        video: keyframe_scores([predicted[i] for i in rows], [truth[i] for i in rows], n_future)
+        for video, rows in clips.items()
     }
 
 

@@ -48,11 +48,17 @@ def test_keyin_train_dataset_custom_trains_on_the_imported_folder_and_scores_its
     assert (root / "train_run" / "checkpoints" / "keyframes" / "last.ckpt").is_file()
 
 
-def test_keyin_eval_scores_a_baseline_on_the_imported_test_split(imported):
+def test_keyin_eval_scores_a_baseline_on_the_imported_test_split_per_video(imported):
     root, _ = imported
-    result = run("eval", "model=random", "dataset=custom", *SIZES, "progress=false", "hydra.run.dir=eval_run", cwd=root)
+    result = run("eval", "model=random", "dataset=custom", *SIZES, "progress=false", "tolerances=[1,2]",
+                 "hydra.run.dir=eval_run", cwd=root)
     assert result.returncode == 0, result.stderr
-    assert last_json(result.stdout)["n_sequences"] == 4
+    metrics = last_json(result.stdout)
+    assert metrics["n_sequences"] == 4 and {"f1_tol2", "hausdorff"} <= set(metrics)
+    rows = (root / "eval_run" / "per_video.csv").read_text().splitlines()
+    assert rows[0].startswith("video,clips,precision,recall") and len(rows) == 2  # the test split is one video
+    sources = json.loads((root / "data" / "custom" / "manifest.json").read_text())["sources"]
+    assert rows[1].split(",")[:2] == [next(s["id"] for s in sources if s["split"] == "test"), "4"]
 
 
 @pytest.mark.parametrize("overrides, message", [
