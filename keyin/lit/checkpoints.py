@@ -13,6 +13,7 @@ from lightning.pytorch.plugins.io import TorchCheckpointIO
 from keyin import RENAMED_SINCE_0_1, __version__
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes
+from keyin.pretrained import full_precision, resolve
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
@@ -63,11 +64,12 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     """Load a keyin checkpoint without running any pickled code (``weights_only=True``).
 
     Args:
+        path: a checkpoint file, or ``pretrained:<name>`` for one shipped with keyin (:mod:`keyin.pretrained`).
         stage: the stage to insist on ("interpolator", "keyframes", "surprise", "tap"); None accepts any.
     Raises:
         CheckpointError: missing file, unsafe or foreign content, or another stage.
     """
-    path = Path(path)
+    path = resolve(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint {path} does not exist; pass the path of a keyin checkpoint")
     try:
@@ -80,7 +82,7 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
         ) from None
     if not isinstance(checkpoint, dict) or STAGE_KEY not in checkpoint:
         raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry); {PASS_A_CHECKPOINT}")
-    checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], checkpoint[STAGE_KEY])
+    checkpoint["state_dict"] = full_precision(upgrade_state_dict(checkpoint["state_dict"], checkpoint[STAGE_KEY]))
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"

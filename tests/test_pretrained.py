@@ -1,0 +1,83 @@
+"""Pretrained models: a slimmed checkpoint loads by name, gives the same discoveries as the full
+one up to half precision, refuses a changed file; every shipped model is the file its card names."""
+
+import json
+
+import pytest
+import torch
+
+import keyin.pretrained as pretrained
+from keyin.data.clips import ShardClips
+from keyin.data.hdf5 import split_files
+from keyin.errors import CheckpointError
+from keyin.io import sha256_of
+from keyin.lit.checkpoints import load_checkpoint, load_trained_module
+from tests.cli.runner import run
+from tests.configs import OLD_SMOKE_KEYIN
+
+
+@pytest.fixture(scope="module")
+def smoke_checkpoint(tmp_path_factory):
+    root = tmp_path_factory.mktemp("pretrained")
+    assert run("generate", "splits={test: 4}", "progress=false", cwd=root).returncode == 0
+    result = run("train", "experiment=brownian_keyin", "scale=smoke", *OLD_SMOKE_KEYIN, "logger=none",
+                 "trainer.enable_progress_bar=false", "hydra.run.dir=run", cwd=root)
+    assert result.returncode == 0, result.stderr
+    return root, root / "run" / "checkpoints" / "keyframes" / "last.ckpt"
+
+
+@pytest.fixture
+def shipped(smoke_checkpoint, tmp_path, monkeypatch):
+    """The smoke checkpoint exported as pretrained:smoke into a folder of its own."""
+    _, path = smoke_checkpoint
+    monkeypatch.setattr(pretrained, "FOLDER", tmp_path)
+    monkeypatch.setattr(pretrained.resolve, "__defaults__", (tmp_path,))
+    file = pretrained.export(load_checkpoint(path), "smoke", {"command": "test"}, tmp_path)
+    return path, file
+
+
+def test_a_slimmed_checkpoint_keeps_the_weights_to_half_precision_and_drops_the_optimizer(shipped):
+    path, file = shipped
+    full, slim = load_checkpoint(path), load_checkpoint("pretrained:smoke")
+    assert "optimizer_states" in full and "optimizer_states" not in slim
+    assert file.stat().st_size < path.stat().st_size / 2
+    for name, value in full["state_dict"].items():
+        assert slim["state_dict"][name].dtype == value.dtype
+        torch.testing.assert_close(slim["state_dict"][name], value, rtol=1e-3, atol=1e-4)
+    card = json.loads((file.parent / "models.json").read_text())["smoke"]
+    assert card["sha256"] == sha256_of(file) and card["command"] == "test"
+
+
+def test_the_pretrained_module_finds_the_same_keyframes_as_the_full_one(smoke_checkpoint, shipped):
+    root, _ = smoke_checkpoint
+    path, _ = shipped
+    clips = ShardClips(split_files(root / "data" / "brownian", "test"), (32, 32, 1), 5, 30)
+    frames, lengths = torch.stack([clip["frames"] for clip in clips]), torch.stack([clip["future_length"] for clip in clips])
+    found = {}
+    for source in (path, "pretrained:smoke"):
+        module, config = load_trained_module(source)
+        found[str(source)] = {name: find(frames, lengths) for name, find in module.discoverers(config["model"]["name"]).items()}
+    assert found[str(path)] == found["pretrained:smoke"]
+
+
+def test_an_unknown_name_or_a_changed_file_is_refused(shipped):
+    _, file = shipped
+    with pytest.raises(CheckpointError, match="no pretrained model named 'pushing'; this keyin ships pretrained:smoke"):
+        load_checkpoint("pretrained:pushing")
+    file.write_bytes(file.read_bytes() + b"0")
+    with pytest.raises(CheckpointError, match="not the file keyin shipped"):
+        load_checkpoint("pretrained:smoke")
+
+
+def test_keyin_eval_takes_a_pretrained_name(smoke_checkpoint, tmp_path):
+    root, _ = smoke_checkpoint
+    result = run("eval", "ckpt=pretrained:nothing", "progress=false", cwd=root)
+    assert result.returncode != 0 and "error: no pretrained model named 'nothing'" in result.stderr
+
+
+@pytest.mark.parametrize("name", sorted(pretrained.registry()))
+def test_every_shipped_model_is_the_file_its_card_names(name):
+    checkpoint = load_checkpoint(f"{pretrained.PREFIX}{name}")
+    card = pretrained.registry()[name]
+    assert checkpoint["keyin_config"]["model"]["name"] == card["model"]
+    assert checkpoint["keyin_config"]["dataset"]["name"] == card["dataset"]
