@@ -8,6 +8,7 @@ from pathlib import Path
 
 import torch
 from hydra.utils import instantiate
+from torch.utils.data import Dataset, Subset
 from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
@@ -38,12 +39,29 @@ def eval_clips(cfg: DictConfig, dataset: DictConfig) -> ShardClips:
     )
 
 
-def clip_videos(cfg: DictConfig, dataset: DictConfig) -> list[str] | None:
-    """Per clip, the video keyin-import cut it from (None: generated clips, or a single file)."""
+def clip_videos(cfg: DictConfig, dataset: DictConfig, count: int) -> list[str] | None:
+    """Per clip of the first ``count``, the video keyin-import cut it from (None: generated clips, or a single file)."""
     folder = Path(cfg.data_dir) / dataset.name
     if cfg.data is not None or "sources" not in read_manifest(folder):
         return None
-    return [origin.video for origin in clip_origins(folder, cfg.split)]
+    return [origin.video for origin in clip_origins(folder, cfg.split)][:count]
+
+
+def check_discovery(cfg: DictConfig, stage: str | None) -> list[str] | None:
+    """``discovery``: null (every rule the checkpoint scores), or a rule or list of rules of a stage-2 checkpoint."""
+    if cfg.discovery is None:
+        return None
+    if stage != "keyframes":
+        raise ConfigError(f"discovery={cfg.discovery} chooses among a stage-2 checkpoint's rules; drop it for this model")
+    return [cfg.discovery] if isinstance(cfg.discovery, str) else list(cfg.discovery)
+
+
+def first_clips(clips: ShardClips, count: int | None) -> Dataset:
+    """The first ``count`` clips (all for None)."""
+    if count is None:
+        return clips
+    require_positive_int(count, "clips")
+    return Subset(clips, range(min(count, len(clips))))
 
 
 def check_tolerances(cfg: DictConfig) -> list[int]:
@@ -74,12 +92,16 @@ def evaluate(cfg: DictConfig) -> dict:
     if cfg.ckpt is not None:
         module, trained = load_trained_module(cfg.ckpt, stage=None)
         check_video_samples(cfg, module.stage)
+        rules = check_discovery(cfg, module.stage)
         name = trained["model"]["name"]
         if module.stage == "interpolator":  # exact best segmentation under the interpolator
             n_keyframes = trained["dataset"]["n_keyframes"]
             discoverers = {f"{name}_segmentation": SegmentationDiscoverer(module, n_keyframes)}
         else:
-            discoverers = module.discoverers(name)
+            try:
+                discoverers = module.discoverers(name, rules)
+            except ValueError as err:
+                raise ConfigError(f"discovery={cfg.discovery}: {err}; pick among those") from None
         dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
     elif OmegaConf.select(cfg, "model") is None:
         raise ConfigError("choose what to evaluate: model=random|constant or ckpt=<checkpoint path>")
@@ -90,11 +112,13 @@ def evaluate(cfg: DictConfig) -> dict:
         )
     else:
         check_video_samples(cfg, None)
+        check_discovery(cfg, None)
         discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
-    clips = eval_clips(cfg, dataset)
+    clips = first_clips(eval_clips(cfg, dataset), cfg.clips)
     loader = dict(batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress)
     metrics = score_methods(
-        discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), tolerances, clip_videos(cfg, dataset), **loader
+        discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), tolerances, clip_videos(cfg, dataset, len(clips)),
+        **loader,
     )
     if cfg.video_samples:
         torch.manual_seed(cfg.seed)  # the prior samples

@@ -9,7 +9,7 @@ keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5
 from __future__ import annotations
 
 import functools
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import lightning as L
 import torch
@@ -170,15 +170,18 @@ class KeyframeModule(L.LightningModule):
             "max_offset": self.hparams.stage1["max_offset"],
         }
 
-    def discoverers(self, name: str) -> dict[str, Callable]:
-        """The discovery rules to score, by method name: the configured one first; with offset
-        evidence also the other, as ``<name>_<rule>``."""
-        rules = [self.hparams.discovery]
+    def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
+        """The discovery rules to score, by method name: the configured one (named ``name``) first;
+        with offset evidence also the others, as ``<name>_<rule>``; ``rules`` keeps only those."""
+        available = [self.hparams.discovery]
         if self.hparams.offset_evidence:
-            rules += [rule for rule in KEYIN_RULES if rule != self.hparams.discovery]
+            available += [rule for rule in KEYIN_RULES if rule != self.hparams.discovery]
+        unknown = [rule for rule in rules or () if rule not in available]
+        if unknown:
+            raise ValueError(f"this model discovers by {available}, not {unknown}")
         return {
             name if index == 0 else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
-            for index, rule in enumerate(rules)
+            for index, rule in enumerate(available) if rules is None or rule in rules
         }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:

@@ -77,6 +77,19 @@ def test_eval_of_the_checkpoint_matches_the_training_run(trained):
         assert evaluated[key] == metrics[key]
 
 
+def test_eval_scores_the_chosen_rules_on_the_first_clips(trained):
+    root, metrics = trained
+    result = run("eval", "ckpt=run/checkpoints/keyframes/last.ckpt", "discovery=[map]", "clips=3", "progress=false",
+                 "hydra.run.dir=eval_map", cwd=root)
+    assert result.returncode == 0, result.stderr
+    evaluated = last_json(result.stdout)
+    assert evaluated["method"] == "keyin_plus_map" and evaluated["n_sequences"] == 3 and "variants" not in evaluated
+    assert len((root / "eval_map" / "per_video.csv").read_text().splitlines()) == 1 + 3  # generated clips: one video each
+    bad = run("eval", "ckpt=run/checkpoints/keyframes/last.ckpt", "discovery=viterbi", "progress=false", cwd=root)
+    assert error_line(bad) == (
+        "error: discovery=viterbi: this model discovers by ['offsets', 'boundaries', 'map'], not ['viterbi']; pick among those")
+
+
 def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):
     root, metrics = trained
     result = run("train", *KEYIN_SMOKE, "resume=run", cwd=root)
