@@ -27,6 +27,7 @@ PAPER_TABLE1 = {
     "brownian": {"random": 0.15, "constant": 0.17, "static": 0.21, "surprise": 0.73, "keyin_paper": 0.84, "keyin_plus": 0.84},
     "pushing": {"random": 0.18, "constant": 0.23, "static": 0.18, "surprise": 0.10, "keyin_paper": 0.30, "keyin_plus": 0.30},
 }
+PAPER_ROWS = ("random", "constant", "static", "jumpy", "surprise", "keyin_paper")  # the paper's methods, as published
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "precision", "recall", "n_predicted", "hausdorff",
@@ -103,10 +104,18 @@ def current_name(method: str) -> str:
     return method if new is None else f"{new}_{variant}" if variant else new
 
 
-def method_sort_key(method: str) -> tuple[int, str]:
-    """Table order: the paper's rows first (variants beside their method), then the rest."""
+def row_source(method: str) -> str:
+    """``paper`` for a method as the paper published it (:data:`PAPER_ROWS`), ``ours`` for our
+    additions and variants (keyin_plus, change-point, Surprise without its shift, ...)."""
+    return "paper" if method in PAPER_ROWS else "ours"
+
+
+def method_sort_key(method: str) -> tuple[int, int, str]:
+    """Table order: the paper's rows first, in the paper's order; then ours, beside the method they build on."""
+    if method in PAPER_ROWS:
+        return (0, PAPER_ROWS.index(method), method)
     base = method.split("_")[0]
-    return (METHOD_ORDER.index(base) if base in METHOD_ORDER else len(METHOD_ORDER), method)
+    return (1, METHOD_ORDER.index(base) if base in METHOD_ORDER else len(METHOD_ORDER), method)
 
 
 def group_by_seed(
@@ -164,16 +173,16 @@ def _spread(mean: float, std: float) -> str:
 def markdown_table(rows: list[TableRow]) -> str:
     """Table 1 as Markdown: F1 mean ± std over seeds in the information rule's two columns
     (interior, with ends; docs/evaluation.md) and as the method gives its keyframes, the paper's F1,
-    and companions (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
+    and companions; the paper's methods first, our additions after them (``row``: paper or ours) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
     lines = [
-        "| dataset | method | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
+        "| dataset | method | row | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
         "| precision | recall | keyframes/clip | Hausdorff | seeds |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         m, s = row.mean, row.std
         lines.append(
-            f"| {row.dataset} | {row.method} | {_spread(m['f1_interior'], s['f1_interior'])} | "
+            f"| {row.dataset} | {row.method} | {row_source(row.method)} | {_spread(m['f1_interior'], s['f1_interior'])} | "
             f"{_spread(m['f1_with_ends'], s['f1_with_ends'])} | {_spread(m['f1'], s['f1'])} | {_paper(row.paper_f1)} | "
             f"{'–' if math.isnan(m['f1_tol1_interior']) else format(m['f1_tol1_interior'], '.3f')} | "
             f"{m['f1_tol1']:.3f} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from keyin.cli import report
-from keyin.eval.report import collect_metrics, csv_table, markdown_table, summarise
+from keyin.eval.report import collect_metrics, csv_table, markdown_table, method_sort_key, row_source, summarise
 
 
 def write_job(root, name, method, seed, f1, version="0.2.0", **extra):
@@ -47,8 +47,8 @@ def test_rows_average_over_seeds_in_the_papers_order_with_its_numbers(sweep):
 def test_markdown_and_csv_carry_every_row(sweep):
     rows = summarise(collect_metrics(sweep))
     markdown = markdown_table(rows)
-    assert "| brownian | keyin_plus | 0.550 ± 0.100 | 0.650 ± 0.100 | 0.600 ± 0.100 | 0.84 | 0.650 | 0.700 |" in markdown
-    assert "| brownian | surprise_shift0 | – | – | 0.100 ± 0.000 | – | – |" in markdown  # a variant: no columns here
+    assert "| brownian | keyin_plus | ours | 0.550 ± 0.100 | 0.650 ± 0.100 | 0.600 ± 0.100 | 0.84 | 0.650 | 0.700 |" in markdown
+    assert "| brownian | surprise_shift0 | ours | – | – | 0.100 ± 0.000 | – | – |" in markdown  # a variant: no columns here
     lines = csv_table(rows).splitlines()
     assert len(lines) == 1 + len(rows)
     assert lines[0].startswith("dataset,method,seeds,paper_f1,f1_interior_mean,f1_interior_std,f1_with_ends_mean")
@@ -62,7 +62,7 @@ def test_a_keyin_0_1_job_says_keyin_for_keyin_plus_and_is_reported_under_that_na
     rows = summarise(collect_metrics(tmp_path))
     assert [row.method for row in rows] == ["keyin_paper", "keyin_plus", "keyin_plus_offsets"]
     assert rows[1].mean["f1"] == pytest.approx(0.5) and rows[2].mean["f1"] == pytest.approx(0.2)
-    assert "| brownian | keyin_plus | – | – | 0.500 ± 0.000 | 0.84 | – |" in markdown_table(rows)
+    assert "| brownian | keyin_plus | ours | – | – | 0.500 ± 0.000 | 0.84 | – |" in markdown_table(rows)
 
 
 def test_a_seed_reported_twice_and_an_empty_folder_are_refused(sweep, tmp_path_factory):
@@ -101,4 +101,11 @@ def test_keyin_report_takes_several_sweep_folders(tmp_path):
     report.main([str(tmp_path / "first"), str(tmp_path / "second"), "--out", str(tmp_path / "merged")])
     table = (tmp_path / "merged" / "table1.md").read_text()
     assert f"From `{tmp_path / 'first'}`, `{tmp_path / 'second'}`" in table
-    assert "| brownian | keyin_plus | 0.550 ± 0.141 | 0.650 ± 0.141 | 0.600 ± 0.141 | 0.84 |" in table
+    assert "| brownian | keyin_plus | ours | 0.550 ± 0.141 | 0.650 ± 0.141 | 0.600 ± 0.141 | 0.84 |" in table
+
+
+def test_the_papers_methods_come_first_and_our_additions_are_marked():
+    methods = ["keyin_plus", "changepoint", "keyin_paper", "random", "surprise_shift0", "surprise", "keyin_plus_offsets"]
+    ordered = sorted(methods, key=method_sort_key)
+    assert ordered == ["random", "surprise", "keyin_paper", "surprise_shift0", "keyin_plus", "keyin_plus_offsets", "changepoint"]
+    assert [row_source(m) for m in ordered] == ["paper"] * 3 + ["ours"] * 4
