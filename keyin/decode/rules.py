@@ -19,7 +19,8 @@ from keyin.decode.segmentation import KeyframeCost, decode_by_length
 from keyin.losses.image import future_pixel_weights
 from keyin.models.keyin import KEYIN
 
-KEYIN_RULES = ("offsets", "boundaries", "map")
+KEYIN_RULES = ("offsets", "boundaries", "map", "segmentation")
+VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
 
 
 def boundary_keyframes(scores: Tensor, lengths: Tensor, n_keyframes: int, max_offset: int) -> list[list[int]]:
@@ -149,7 +150,8 @@ def keyin_keyframes(
             per-frame boundary scores, within M gaps of at most S) or "map" (the exact best
             segmentation under the frozen interpolator's pixel BCE with ``keyframe_cost`` per
             keyframe, or each clip's knee count for ``"knee"`` (label-free), plus
-            ``boundary_weight`` times the boundary scores where there are any).
+            ``boundary_weight`` times the boundary scores where there are any) or "segmentation"
+            ("map" without stage 2's boundary scores: stage 1's exact segmentation at the same price).
         pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
     Returns:
         Per clip, the keyframe positions inside its valid frames; "boundaries" and "map" add the
@@ -169,7 +171,7 @@ def keyin_keyframes(
     else:
         interior = map_keyframes(
             model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
-            future_length, model.predictor.n_keyframes, keyframe_cost, keys.boundary_scores, boundary_weight,
-            weights=pixel_weights,
+            future_length, model.predictor.n_keyframes, keyframe_cost,
+            None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
         )
     return with_sequence_ends(interior, lengths, n_future)

@@ -14,7 +14,7 @@ from typing import Any, Callable, Sequence
 import lightning as L
 import torch
 
-from keyin.decode.rules import KEYIN_RULES, keyin_keyframes
+from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframes
 from keyin.decode.segmentation import KNEE
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
@@ -134,7 +134,7 @@ class KeyframeModule(L.LightningModule):
         self, clips: torch.Tensor, future_length: torch.Tensor, discovery: str | None = None
     ) -> list[list[int]]:
         """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
-        "boundaries" or "map"; default: the module's ``discovery``), inside each clip."""
+        "boundaries", "map" or "segmentation"; default: the module's ``discovery``), inside each clip."""
         clips = clips.to(self.device)
         with evaluating(self):
             return keyin_keyframes(
@@ -172,16 +172,20 @@ class KeyframeModule(L.LightningModule):
 
     def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
         """The discovery rules to score, by method name: the configured one (named ``name``) first;
-        with offset evidence also the others, as ``<name>_<rule>``; ``rules`` keeps only those."""
-        available = [self.hparams.discovery]
+        with offset evidence also the other :data:`VARIANT_RULES`, as ``<name>_<rule>``. ``rules``
+        picks among those and "segmentation" (any model: stage 1's segmentation at the same price)."""
+        scored = [self.hparams.discovery]
         if self.hparams.offset_evidence:
-            available += [rule for rule in KEYIN_RULES if rule != self.hparams.discovery]
-        unknown = [rule for rule in rules or () if rule not in available]
-        if unknown:
-            raise ValueError(f"this model discovers by {available}, not {unknown}")
+            scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
+        if rules is not None:
+            choosable = scored + [rule for rule in ("segmentation",) if rule not in scored]
+            unknown = [rule for rule in rules if rule not in choosable]
+            if unknown:
+                raise ValueError(f"this model discovers by {choosable}, not {unknown}")
+            scored = [rule for rule in choosable if rule in rules]
         return {
-            name if index == 0 else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
-            for index, rule in enumerate(available) if rules is None or rule in rules
+            name if rule == self.hparams.discovery else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
+            for rule in scored
         }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:

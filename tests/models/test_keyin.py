@@ -55,3 +55,14 @@ def test_planning_renders_the_decoded_prior_keyframes_of_given_latents():
     assert images.shape == (3, 3, 1, 8, 8) and last.shape == (3, 1, 1, 8, 8)
     torch.testing.assert_close(images, torch.sigmoid(keyin.decoder(keys.key_emb)))
     torch.testing.assert_close(last[:, 0], images[:, -1])
+
+
+def test_the_segmentation_rule_is_map_without_stage_2s_scores():
+    keyin, data = model(), batch()
+    torch.nn.init.normal_(keyin.predictor.boundary_head.weight, std=3.0, generator=torch.Generator().manual_seed(0))
+    frames, lengths = data["frames"], data["future_length"]
+    for cost in (0.0, 5.0):
+        segmentation = keyin_keyframes(keyin, frames, lengths, "segmentation", cost, boundary_weight=1e3)
+        assert segmentation == keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=0.0)
+        # the test's premise: at this weight the (non-zero) scores change the map keyframes
+        assert keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=1e3) != segmentation
