@@ -72,6 +72,7 @@ def bad(root):
     np.save(root / "empty.npy", np.zeros((0, 16, 16, 1), np.uint8))
     np.save(root / "masks.npy", (frames(20) > 100).astype(np.uint8))
     torch.save({STAGE_KEY: "interpolator", "state_dict": {}}, root / "stage1.ckpt")
+    untrained_checkpoint(root / "paper.ckpt", *SIZES, "model=keyin")  # the paper's KEYIN: no boundary scores
     return root
 
 
@@ -88,6 +89,8 @@ BAD_INPUTS = [
     ("no-checkpoint", ["ckpt=null"], "ckpt= is required"),
     ("window-stride", ["window_stride=10"], "window_stride=10 must be a whole number in 1..9"),
     ("keyframe-cost", ["keyframe_cost=cheap"], "keyframe_cost='cheap' must be knee (label-free), nats per keyframe"),
+    ("boundaries-without-evidence", ["ckpt=paper.ckpt", "rule=boundaries"],
+     "rule=boundaries needs a model with offset evidence (model=keyin_plus), which paper.ckpt has not; pass rule=map"),
     ("unknown-video-label", ["labels=labels.json", "input=videos/short.mp4"], "labels the video 'long.mp4', which is not"),
 ]
 
