@@ -19,19 +19,19 @@ CHANNELS = (1, 3)  # grey or RGB; a fourth (alpha) channel is dropped
 
 def prepare_video(
     frames: Iterable[np.ndarray], where: str, image_size: int, channels: int, frame_stride: int, binary: bool = False
-) -> tuple[np.ndarray, int]:
+) -> tuple[np.ndarray, int, tuple[int, int, int]]:
     """Every ``frame_stride``-th frame, checked and fitted to the model.
 
     Args:
         frames: the video's (H, W, C) frames as stored, C in 1, 3, 4.
         where: how errors name the video.
     Returns:
-        kept frames uint8 (ceil(T / frame_stride), image_size, image_size, channels) and T, the
-        number of frames the video had.
+        kept frames uint8 (ceil(T / frame_stride), image_size, image_size, channels), T, the
+        number of frames the video had, and the (H, W, C) of its frames as stored.
     Raises:
         DatasetFormatError: no frames, a frame of another shape or kind, values out of range, 0/1 frames.
     """
-    kept, count, high, dtype = [], 0, 0, None
+    kept, count, high, dtype, shape = [], 0, 0, None, (0, 0, 0)
     for count, frame in enumerate(frames, start=1):
         frame = np.asarray(frame)
         if frame.ndim != 3 or frame.shape[-1] not in (1, 3, 4):
@@ -39,7 +39,7 @@ def prepare_video(
                 f"{where}: a frame has shape {frame.shape}; frames are (H, W, C) with C = 1 (grey), 3 (RGB) "
                 f"or 4 (RGBA), so videos are (T, H, W, C) (grey ones need their channel axis: frames[..., None])"
             )
-        dtype = frame.dtype
+        dtype, shape = frame.dtype, frame.shape
         if (count - 1) % frame_stride:
             continue
         frame, frame_high = as_uint8(frame, where, binary)
@@ -52,7 +52,7 @@ def prepare_video(
             f"{where} holds {dtype} frames whose largest value is 1: 0/1 images would import as black; "
             f"store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true to scale 0/1 to 0/255"
         )
-    return np.stack(kept), count
+    return np.stack(kept), count, shape
 
 
 def as_uint8(frame: np.ndarray, where: str, binary: bool) -> tuple[np.ndarray, int]:
@@ -91,3 +91,21 @@ def fit_frame(frame: np.ndarray, image_size: int, channels: int) -> np.ndarray:
     if side != image_size:
         image = image.resize((image_size, image_size), Image.Resampling.BILINEAR)
     return np.asarray(image).reshape(image_size, image_size, channels)
+
+
+def fit_note(stored_shape: tuple[int, int, int], image_size: int, channels: int) -> str | None:
+    """What :func:`fit_frame` does to frames of ``stored_shape`` (H, W, C), or None if they are the
+    model's already, e.g. ``240x320 RGB frames are centre-cropped to 240x240 and resized to 64x64``."""
+    height, width, stored = stored_shape
+    kind = lambda c: "grey" if c == 1 else "RGB"  # noqa: E731  (a fourth, alpha channel is dropped)
+    steps = []
+    if height != width:
+        steps.append(f"centre-cropped to {min(height, width)}x{min(height, width)}")
+    if min(height, width) != image_size:
+        steps.append(f"resized to {image_size}x{image_size}")
+    if kind(stored) != kind(channels):
+        steps.append(f"made {kind(channels)}")
+    if not steps:
+        return None
+    done = steps[0] if len(steps) == 1 else f"{', '.join(steps[:-1])} and {steps[-1]}"
+    return f"{height}x{width} {kind(stored)} frames are {done}"

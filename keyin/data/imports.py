@@ -81,6 +81,8 @@ class ImportedVideo:
     frames: np.ndarray
     labels: list[int] | None  # keyframes as original frame numbers; None: the import has no labels
     starts: list[int]  # its windows' first kept frames
+    stored_shape: tuple[int, int, int]  # (H, W, C) of its frames as stored, before fitting
+    where: str  # how messages name it (:attr:`keyin.data.sources.Video.where`)
 
     def keyframes(self, frame_stride: int) -> list[int]:
         """The labels as kept-frame indices."""
@@ -175,16 +177,23 @@ def import_videos(
 
 
 def read_videos(
-    source: Path, spec: ImportSpec, labels: dict | None, labels_path: Path | None, progress: bool
+    source: Path,
+    spec: ImportSpec,
+    labels: dict | None,
+    labels_path: Path | None,
+    progress: bool,
+    verb: str = "importing",
+    key: str = "source",
 ) -> tuple[list[ImportedVideo], list[str], list[str]]:
     """Decode and fit every video of ``source``; returns those long enough for a clip, why each
-    other one was skipped, and every video id seen."""
+    other one was skipped, and every video id seen (``verb`` names the work in the progress bar,
+    ``key`` the setting that named the source in the errors)."""
     videos, skipped, seen = [], [], []
     with Progress(disable=not progress) as bar:
-        task = bar.add_task(f"importing {source}", total=None)
-        for video in find_videos(source, spec.camera_key):
+        task = bar.add_task(f"{verb} {source}", total=None)
+        for video in find_videos(source, spec.camera_key, key):
             seen.append(video.id)
-            frames, n_frames = prepare_video(
+            frames, n_frames, stored_shape = prepare_video(
                 video.frames, video.where, spec.image_size, spec.channels, spec.frame_stride, spec.binary
             )
             labelled = None
@@ -193,7 +202,9 @@ def read_videos(
             starts = window_starts(len(frames), spec.clip_length, spec.n_cond, spec.stride, spec.min_future)
             if starts:
                 fps = video.fps or spec.fps
-                videos.append(ImportedVideo(video.id, video.path, n_frames, fps, frames, labelled, starts))
+                videos.append(
+                    ImportedVideo(video.id, video.path, n_frames, fps, frames, labelled, starts, stored_shape, video.where)
+                )
             else:
                 skipped.append(
                     f"{video.where} has {len(frames)} frame(s) at frame_stride={spec.frame_stride}, fewer than "

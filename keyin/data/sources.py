@@ -77,15 +77,16 @@ def image_files(folder: Path) -> list[Path]:
     return by_name(p for p in visible(folder) if p.is_file() and suffix(p) in IMAGE_SUFFIXES)
 
 
-def find_videos(source: Path, camera_key: str) -> Iterator[Video]:
-    """Every video of ``source`` (see the module docstring), in natural name order.
+def find_videos(source: Path, camera_key: str, key: str = "source") -> Iterator[Video]:
+    """Every video of ``source`` (see the module docstring), in natural name order; ``key`` is the
+    setting that named it, for the errors.
 
     Raises:
         DatasetFormatError: the source does not exist, holds no video, or mixes frames and videos.
     """
     source = Path(source)
     if not source.exists():
-        raise DatasetFormatError(f"source {source} does not exist; pass source=<a video file, an array or "
+        raise DatasetFormatError(f"{key} {source} does not exist; pass {key}=<a video file, an array or "
                                  f"robomimic file, or a folder of videos or of image frames>")
     if source.is_file():
         yield from file_videos(source, camera_key)
@@ -102,7 +103,7 @@ def find_videos(source: Path, camera_key: str) -> Iterator[Video]:
         return
     if not entries:
         known = ", ".join(VIDEO_SUFFIXES + IMAGE_SUFFIXES + ARRAY_SUFFIXES + HDF5_SUFFIXES)
-        raise DatasetFormatError(f"{source} holds no videos, frames or array files ({known}); pass another source=")
+        raise DatasetFormatError(f"{source} holds no videos, frames or array files ({known}); pass another {key}=")
     for entry in entries:
         if entry.is_dir():
             yield frame_folder(entry, image_files(entry))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from keyin.losses.soft_keyframe import argmax_positions
+from keyin.losses.soft_keyframe import argmax_positions, position_distributions
 
 
 def offset_keyframes(offset_probs: Tensor, future_length: Tensor) -> list[list[int]]:
@@ -19,6 +19,22 @@ def offset_keyframes(offset_probs: Tensor, future_length: Tensor) -> list[list[i
     """
     positions = argmax_positions(offset_probs).cpu()
     return [[p for p in row.tolist() if p < length] for row, length in zip(positions, future_length.tolist())]
+
+
+def keyframe_probabilities(offset_probs: Tensor, n_future: int) -> Tensor:
+    """The probability that a keyframe sits at each future position under δ (REFERENCE §3.2).
+
+    Keyframes sit at strictly increasing positions, so "keyframe t at j" are disjoint events over
+    t and their probabilities ``D^t[j + 1]`` add up to the probability of a keyframe at j.
+
+    Args:
+        offset_probs: (B, M, S) offset distributions δ.
+        n_future: N.
+    Returns:
+        (B, N) ``Σ_t D^t[j + 1]`` in [0, 1].
+    """
+    keyframe_pos, _ = position_distributions(offset_probs)  # (B, M, L_ext)
+    return keyframe_pos[..., 1 : n_future + 1].sum(1).clamp(0.0, 1.0)
 
 
 def joint_offset_keyframes(log_offsets: Tensor, future_length: Tensor) -> list[list[int]]:

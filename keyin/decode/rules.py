@@ -13,7 +13,7 @@ import torch
 from torch import Tensor
 
 from keyin.decode.ends import sequence_ends, with_ends
-from keyin.decode.offsets import offset_keyframes
+from keyin.decode.offsets import keyframe_probabilities, offset_keyframes
 from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
 from keyin.decode.segmentation import KeyframeCost, decode_by_length
 from keyin.losses.image import future_pixel_weights
@@ -175,3 +175,18 @@ def keyin_keyframes(
             None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
         )
     return with_sequence_ends(interior, lengths, n_future)
+
+
+@torch.no_grad()
+def keyin_keyframe_probabilities(model: KEYIN, clips: Tensor, future_length: Tensor) -> Tensor:
+    """How sure KEYIN is of a keyframe at each future frame: the probability of one there under the
+    posterior mean's offsets, read along their argmax chain as :func:`keyin_keyframes` reads them.
+
+    Args:
+        model: a trained :class:`keyin.models.KEYIN` in eval mode.
+        clips: (B, L, C, H, W) in [0, 1]; future_length: (B,) valid future frames.
+    Returns:
+        (B, N) probabilities (:func:`keyin.decode.offsets.keyframe_probabilities`).
+    """
+    _, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
+    return keyframe_probabilities(keys.offset_probs, clips.shape[1] - model.n_cond)

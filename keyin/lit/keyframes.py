@@ -14,8 +14,8 @@ from typing import Any, Callable, Sequence
 import lightning as L
 import torch
 
-from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframes
-from keyin.decode.segmentation import KNEE
+from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframe_probabilities, keyin_keyframes
+from keyin.decode.segmentation import KNEE, KeyframeCost
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.checkpoints import upgrade_state_dict
@@ -131,17 +131,31 @@ class KeyframeModule(L.LightningModule):
 
     @torch.no_grad()
     def discover(
-        self, clips: torch.Tensor, future_length: torch.Tensor, discovery: str | None = None
+        self,
+        clips: torch.Tensor,
+        future_length: torch.Tensor,
+        discovery: str | None = None,
+        keyframe_cost: KeyframeCost | None = None,
     ) -> list[list[int]]:
         """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
-        "boundaries", "map" or "segmentation"; default: the module's ``discovery``), inside each clip."""
+        "boundaries", "map" or "segmentation"; default: the module's ``discovery``), inside each clip;
+        "map" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
+        ``map_keyframe_cost``)."""
         clips = clips.to(self.device)
+        price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
         with evaluating(self):
             return keyin_keyframes(
                 self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
-                self.hparams.map_keyframe_cost, self.hparams.map_boundary_weight,
+                price, self.hparams.map_boundary_weight,
                 future_pixel_weights(self.pixel_weights(clips), self.model.n_cond),
             )
+
+    @torch.no_grad()
+    def keyframe_probabilities(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
+        """(B, N) probability of a keyframe at each future frame of (B, L, C, H, W) clips
+        (:func:`keyin.decode.rules.keyin_keyframe_probabilities`)."""
+        with evaluating(self):
+            return keyin_keyframe_probabilities(self.model, clips.to(self.device), future_length.to(self.device)).cpu()
 
     @torch.no_grad()
     def validation_pictures(self, batch: dict[str, torch.Tensor], count: int) -> dict[str, Any]:

@@ -48,21 +48,25 @@ def marked_frames(
     return padded
 
 
-def save_keyframe_gif(path: Path, rows: np.ndarray, per_column: int = 1) -> Path:
+def save_keyframe_gif(
+    path: Path, rows: np.ndarray, per_column: int = 1, duration_ms: float = 250, side: int = 256
+) -> Path:
     """An animated GIF of marked clips, one frame per clip index: the clips side by side, or in
-    columns of ``per_column`` consecutive clips.
+    columns of ``per_column`` consecutive clips, enlarged by a whole factor to about ``side``
+    pixels high per clip.
 
     Args:
         rows: (K, L, h, w, 3) uint8, e.g. :func:`marked_frames` of each clip; K divisible by
             ``per_column``.
+        duration_ms: how long each frame shows.
     """
     n_clips, length, height, width, _ = rows.shape
     columns = rows.reshape(n_clips // per_column, per_column, length, height, width, 3)
     movie = columns.transpose(2, 1, 3, 0, 4, 5).reshape(length, per_column * height, -1, 3)
-    scale = max(1, 256 // height)
+    scale = max(1, side // height)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    iio.imwrite(path, movie.repeat(scale, axis=1).repeat(scale, axis=2), duration=250, loop=0)
+    iio.imwrite(path, movie.repeat(scale, axis=1).repeat(scale, axis=2), duration=duration_ms, loop=0)
     return path
 
 

@@ -4,7 +4,7 @@ import itertools
 
 import torch
 
-from keyin.decode.offsets import offset_keyframes
+from keyin.decode.offsets import keyframe_probabilities, offset_keyframes
 
 
 def one_hot_offsets(offsets: list[list[int]], max_offset: int) -> torch.Tensor:
@@ -84,3 +84,17 @@ def test_offset_log_probs_along_a_path_are_the_chains_logits():
         expected = torch.log_softmax(keys.offset_logits[:, t], -1)
         torch.testing.assert_close(table[torch.arange(2), t, place], expected, rtol=1e-5, atol=1e-5)
         place = place + keys.offset_logits[:, t].argmax(-1) + 1
+
+
+def test_keyframe_probabilities_are_those_of_enumerating_every_offset_path():
+    torch.manual_seed(0)
+    n_keys, max_offset, n_future = 3, 3, 7
+    probs = torch.softmax(torch.randn(2, n_keys, max_offset, dtype=torch.float64), -1)
+    expected = torch.zeros(2, n_future, dtype=torch.float64)
+    for offsets in itertools.product(range(1, max_offset + 1), repeat=n_keys):
+        path = torch.stack([probs[:, t, o - 1] for t, o in enumerate(offsets)]).prod(0)  # (B,)
+        for position in itertools.accumulate(offsets):  # extended index = position + 1
+            if position - 1 < n_future:
+                expected[:, position - 1] += path
+    assert torch.allclose(keyframe_probabilities(probs, n_future), expected)
+    assert float(keyframe_probabilities(probs, n_future).max()) <= 1.0

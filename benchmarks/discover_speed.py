@@ -1,0 +1,180 @@
+"""keyin-discover's throughput: kept frames per second through its real path on one long synthetic
+Brownian clip with known turns, and the time of each part.
+
+    python benchmarks/discover_speed.py --frames 600 [--ckpt <stage-2 checkpoint>] \
+        --out benchmarks/results/discover_speed.md
+
+Models: smoke-sized keyin_plus (untrained weights: the speed does not depend on them) at Brownian's
+sizes (32x32 grey, 5 + 30 frames, M 6, S 10) and at pushing's (64x64 RGB, 1 + 30, M 6, S 6), and
+with ``--ckpt`` a trained checkpoint, whose merged keyframes are also scored against the clip's
+turns. Every model runs the default rule (map with the label-free knee) through
+``keyin.eval.windowed.discover_videos``, as keyin-discover does; the parts are timed by wrapping
+the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
+``KEYIN.keyframes`` (encoder and posterior, run by the rule and by the score), the interpolator's
+segment costs, the DP, and the files (JSON and pictures).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import functools
+import json
+import os
+import tempfile
+import time
+from collections import defaultdict
+from datetime import date
+from pathlib import Path
+from typing import Iterator
+
+import imageio.v3 as iio
+import numpy as np
+import torch
+from hydra import compose, initialize_config_module
+from hydra.utils import instantiate
+
+import keyin.decode.rules
+import keyin.decode.segmentation
+import keyin.eval.windowed
+from common import cpu_model, publish
+from keyin.cli.app import CONFIG_MODULE
+from keyin.data.brownian import BrownianGenerator
+from keyin.data.imports import ImportSpec, read_videos
+from keyin.eval.f1 import keyframe_scores
+from keyin.eval.windowed import discover_videos
+from keyin.lit.checkpoints import load_trained_module
+from keyin.models.keyin import KEYIN
+
+PARTS = {  # part -> (owner, attribute) of the function timed
+    "encoder + posterior": (KEYIN, "keyframes"),
+    "segment costs": (keyin.decode.rules, "interpolation_costs"),
+    "DP": (keyin.decode.segmentation, "best_segmentation"),
+    "files": (keyin.eval.windowed, "write_video_folder"),
+}
+
+
+@contextlib.contextmanager
+def timed_parts() -> Iterator[dict[str, float]]:
+    """Seconds spent in each of :data:`PARTS` while the block runs."""
+    seconds: dict[str, float] = defaultdict(float)
+    originals = {part: getattr(owner, name) for part, (owner, name) in PARTS.items()}
+
+    def timer(part, function):
+        @functools.wraps(function)
+        def timed(*args, **kwargs):
+            started = time.perf_counter()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                seconds[part] += time.perf_counter() - started
+        return timed
+
+    for part, (owner, name) in PARTS.items():
+        setattr(owner, name, timer(part, originals[part]))
+    try:
+        yield seconds
+    finally:
+        for part, (owner, name) in PARTS.items():
+            setattr(owner, name, originals[part])
+
+
+def smoke_module(dataset: str):
+    """keyin_plus at scale=smoke on ``dataset``'s sizes, as initialised."""
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = compose("train", overrides=["scale=smoke", "model=keyin_plus", f"dataset={dataset}"])
+    torch.manual_seed(0)
+    stage1 = instantiate(cfg.model.interpolator)
+    return instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams)).eval()
+
+
+def long_clip(folder: Path, n_frames: int) -> tuple[Path, Path, list[int]]:
+    """A Brownian clip of ``n_frames`` 32x32 frames as .npy (lossless) and .mp4, and its turns."""
+    generator = BrownianGenerator(n_cond=1, n_future=n_frames - 1)
+    arrays, _ = generator.generate(0, seed=12345)
+    np.save(folder / "brownian.npy", arrays["frames"])
+    iio.imwrite(folder / "brownian.mp4", np.repeat(arrays["frames"], 3, axis=-1), plugin="pyav", codec="libx264", fps=10)
+    return folder / "brownian.npy", folder / "brownian.mp4", np.flatnonzero(arrays["keyframes"]).tolist()
+
+
+def run(module, label: str, clip: Path, movie: Path, turns: list[int], out: Path) -> dict:
+    """One model through keyin-discover's path; its times, frames per second and, if trained, F1."""
+    sizes = module.hparams.stage1
+    n_cond, n_future = sizes["n_cond"], sizes["n_future"]
+    spec = ImportSpec(image_size=sizes["image_size"], channels=sizes["channels"], n_cond=n_cond, n_future=n_future,
+                      window_stride=n_future // 2)
+    started = time.perf_counter()
+    read_videos(movie, spec, None, None, progress=False)
+    decode = time.perf_counter() - started
+    videos, _, _ = read_videos(clip, spec, None, None, progress=False)
+    discoverer = functools.partial(module.discover, discovery="map", keyframe_cost="knee")
+    with timed_parts() as parts:
+        started = time.perf_counter()
+        summary = discover_videos(videos, discoverer, module.keyframe_probabilities, out / label, {}, n_cond, n_future,
+                                  1, n_future // 2, progress=False)
+        total = time.perf_counter() - started
+    record = json.loads((out / label / summary["videos"]["brownian.npy"]["folder"] / "keyframes.json").read_text())
+    found = [keyframe["frame"] for keyframe in record["keyframes"]]
+    inside = [t for t in turns if n_cond <= t < len(videos[0].frames) - 1]
+    scores = keyframe_scores([found], [inside], len(videos[0].frames))
+    parts = dict(parts, decode=decode, rest=total - sum(parts.values()))
+    return dict(label=label, frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
+                found=len(found), turns=len(inside), f1=scores["f1"], f1_tol1=scores["f1_tol1"])
+
+
+def row(result: dict, trained: bool) -> str:
+    parts = result["parts"]
+    model_seconds = result["total"] - parts["files"]
+    cells = [result["label"], f"{result['frames']} / {result['windows']}",
+             f"{result['frames'] / model_seconds:.0f}", f"{result['frames'] / (result['total'] + parts['decode']):.0f}"]
+    cells += [f"{1000 * parts[p] / result['frames']:.2f}" for p in ("decode", *PARTS, "rest")]
+    cells.append(f"{result['f1']:.3f} / {result['f1_tol1']:.3f} ({result['found']} found, {result['turns']} turns)"
+                 if trained else "untrained")
+    return "| " + " | ".join(cells) + " |"
+
+
+@torch.no_grad()
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=600, help="frames of the long clip")
+    parser.add_argument("--ckpt", help="also a trained stage-2 checkpoint (Brownian sizes)")
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--note", help="a line on the conditions of the run (other load on the machine)")
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args()
+    torch.set_num_threads(args.threads)
+    models = [("smoke, Brownian size (32x32x1)", smoke_module("brownian"), False),
+              ("smoke, pushing size (64x64x3)", smoke_module("pushing"), False)]
+    if args.ckpt:
+        module, config = load_trained_module(args.ckpt, "keyframes")
+        models.append((f"trained {config['model']['name']} ({Path(args.ckpt).parents[2].name})", module, True))
+    with tempfile.TemporaryDirectory() as tmp:
+        clip, movie, turns = long_clip(Path(tmp), args.frames)
+        results = [(run(module, label, clip, movie, turns, Path(tmp)), trained) for label, module, trained in models]
+    command = " ".join(["python benchmarks/discover_speed.py", f"--frames {args.frames}", f"--threads {args.threads}"]
+                       + ([f"--ckpt {args.ckpt}"] if args.ckpt else []))
+    report = "\n".join([
+        f"## keyin-discover throughput on a {args.frames}-frame Brownian clip\n",
+        f"- command: `PYTHONPATH=. {command}`",
+        f"- machine: {cpu_model()}, {os.cpu_count()} logical cores, {args.threads} thread(s) used, torch "
+        f"{torch.__version__}, {date.today().isoformat()}",
+        *([f"- note: {args.note}"] if args.note else []),
+        "- path: keyin.eval.windowed.discover_videos with rule map and the label-free knee, windows every n_future // 2 "
+        "kept frames (each frame in about two windows), batches of 32 windows, frame stride 1",
+        "",
+        "| model | kept frames / windows | frames/s (model) | frames/s (all) | decode | encoder + posterior | "
+        "segment costs | DP | files | rest | F1 / ±1 F1 of the merged keyframes |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+        *(row(result, trained) for result, trained in results),
+        "",
+        "Parts in milliseconds per kept frame. *frames/s (model)*: kept frames over the time from the windows to the "
+        "merged keyframes (files excluded); *all*: over decoding, that and writing the JSON and pictures. *decode*: "
+        "PyAV decoding of the clip as an mp4 and fitting its frames to the model's size (the discovery itself reads "
+        "the lossless .npy of the same clip); *encoder + posterior*: `KEYIN.keyframes`, run once by the rule and once "
+        "by the score; *rest*: cutting windows, the merge, Python.",
+    ])
+    publish(report, args.out)
+
+
+if __name__ == "__main__":
+    main()

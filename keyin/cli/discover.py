@@ -1,0 +1,120 @@
+"""keyin-discover ckpt=<stage-2 checkpoint> input=<videos>: the keyframes of whole videos, found in
+overlapping windows and merged in each video's own frames and seconds (docs/discover.md)."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from collections import defaultdict
+from pathlib import Path
+from typing import Any, Mapping
+
+from omegaconf import DictConfig
+
+from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
+from keyin.cli.checks import require_int_at_least, require_positive_int
+from keyin.data.frames import fit_note
+from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
+from keyin.data.labels import check_known, read_labels
+from keyin.decode.rules import KEYIN_RULES
+from keyin.decode.segmentation import KNEE
+from keyin.errors import ConfigError, DatasetFormatError
+from keyin.eval.windowed import discover_videos
+from keyin.lit.checkpoints import load_trained_module
+
+
+def check_discover(cfg: DictConfig) -> None:
+    """The settings keyin-discover reads before it loads anything."""
+    for key, what in (("ckpt", "<run dir>/checkpoints/keyframes/last.ckpt of a keyin-train run"),
+                      ("input", "a video file, a folder of videos or of PNG/JPG frames, an .npy/.npz or a robomimic .hdf5")):
+        if cfg[key] is None:
+            raise ConfigError(f"{key}= is required: {what}")
+    if cfg.rule is not None and cfg.rule not in KEYIN_RULES:
+        raise ConfigError(f"rule={cfg.rule} is not a rule of KEYIN; choose one of {', '.join(KEYIN_RULES)} or null")
+    cost = cfg.keyframe_cost
+    nats = isinstance(cost, (int, float)) and not isinstance(cost, bool) and cost >= 0
+    if cost is not None and cost != KNEE and not nats:
+        raise ConfigError(f"keyframe_cost={cost!r} must be {KNEE} (label-free), nats per keyframe >= 0, or null")
+    for key in ("frame_stride", "batch_size"):
+        require_positive_int(cfg[key], key)
+    require_int_at_least(cfg.seam, "seam", 0)
+    if cfg.fps is not None and not (isinstance(cfg.fps, (int, float)) and cfg.fps > 0):
+        raise ConfigError(f"fps={cfg.fps!r} must be a positive number (frames per second) or null")
+
+
+def window_stride(cfg: DictConfig, n_future: int) -> int:
+    """Kept frames between window starts: ``window_stride``, by default half a window's future."""
+    stride = max(1, n_future // 2) if cfg.window_stride is None else cfg.window_stride
+    most = max(1, n_future - 1)
+    if not isinstance(stride, int) or isinstance(stride, bool) or not 1 <= stride <= most:
+        raise ConfigError(
+            f"window_stride={stride!r} must be a whole number in 1..{most} (the checkpoint's n_future - 1): a larger "
+            f"one leaves frames that no window may mark; or null for {max(1, n_future // 2)}"
+        )
+    return stride
+
+
+def read_input(cfg: DictConfig, spec: ImportSpec) -> list[ImportedVideo]:
+    """Every video of ``input=`` decoded, checked and fitted to the model (and its labels checked)
+    before anything is written; notes on the fitting and warnings on skipped videos to stderr."""
+    labels_path = Path(cfg.labels) if cfg.labels else None
+    labels = read_labels(labels_path) if labels_path else None
+    videos, skipped, seen = read_videos(Path(cfg.input), spec, labels, labels_path, cfg.progress, "reading", "input")
+    if labels is not None:
+        check_known(labels, labels_path, seen)
+    if not videos:
+        raise DatasetFormatError(f"no video of {cfg.input} is long enough for one window ({skipped[0]}); pass longer "
+                                 f"videos or a smaller frame_stride")
+    fitted = defaultdict(list)
+    for video in videos:
+        fitted[fit_note(video.stored_shape, spec.image_size, spec.channels)].append(video.where)
+    for note, where in fitted.items():
+        if note:
+            print(f"note: {where[0]}{f' and {len(where) - 1} more' if len(where) > 1 else ''}: {note}, the model's "
+                  f"frames ({spec.image_size}x{spec.image_size}, channels={spec.channels})", file=sys.stderr)
+    for reason in skipped:
+        print(f"warning: {reason}: skipped", file=sys.stderr)
+    return videos
+
+
+def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> dict[str, Any]:
+    """What keyframes.json says about the model and its rule."""
+    sizes = module.hparams.stage1
+    rule = cfg.rule or module.hparams.discovery
+    if rule == "boundaries" and not module.hparams.offset_evidence:
+        raise ConfigError(f"rule=boundaries needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
+                          f"has not; pass rule=map or rule=offsets")
+    cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
+    return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule,
+            "keyframe_cost": cost if rule == "map" else None,
+            **{key: sizes[key] for key in ("image_size", "channels", "n_cond", "n_future")}}
+
+
+@user_errors
+def discover(cfg: DictConfig) -> dict:
+    check_discover(cfg)
+    module, trained = load_trained_module(cfg.ckpt, stage="keyframes")
+    model = model_record(cfg, module, trained)
+    n_cond, n_future = model["n_cond"], model["n_future"]
+    stride = window_stride(cfg, n_future)
+    spec = ImportSpec(image_size=model["image_size"], channels=model["channels"], n_cond=n_cond, n_future=n_future,
+                      frame_stride=cfg.frame_stride, window_stride=stride, binary=bool(cfg.binary), fps=cfg.fps,
+                      camera_key=str(cfg.camera_key))
+    videos = read_input(cfg, spec)
+    discoverer = functools.partial(module.discover, discovery=model["rule"], keyframe_cost=model["keyframe_cost"])
+    summary = discover_videos(
+        videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
+        stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress,
+    )
+    summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
+    write_metrics(summary, run_dir())
+    return summary
+
+
+@keyin_main("discover")
+def main(cfg: DictConfig) -> None:
+    discover(cfg)
+
+
+if __name__ == "__main__":
+    main()

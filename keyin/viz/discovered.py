@@ -1,0 +1,135 @@
+"""Pictures of one video's discovered keyframes (keyin-discover): a contact sheet of the keyframes,
+a timeline of the segments between them, and the video annotated frame by frame.
+
+Colours as :mod:`keyin.viz.keyframes`: red a found keyframe, green a label, yellow both, grey the
+conditioning frames that no window can mark.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from keyin.viz.figures import save_figure  # noqa: E402
+from keyin.viz.keyframes import CONDITION, PREDICTED, TRUE, marked_frames, save_keyframe_gif  # noqa: E402
+
+SHEET_COLUMNS = 6
+STRIP_HEIGHT = 6  # pixels of the position bar under each annotated frame (before enlarging)
+
+
+def rgb(colour: tuple[int, int, int]) -> tuple[float, ...]:
+    return tuple(value / 255 for value in colour)
+
+
+def save_contact_sheet(path: Path, images: np.ndarray, captions: Sequence[str], title: str) -> Path:
+    """The keyframes in a grid, each with its caption, in reading order.
+
+    Args:
+        images: (K, H, W, C) uint8 frames, C = 1 or 3; K may be 0.
+        captions: one per image.
+    """
+    if len(images) != len(captions):
+        raise ValueError(f"save_contact_sheet needs one caption per image, got {len(captions)} for {len(images)}")
+    columns = max(1, min(SHEET_COLUMNS, len(images)))
+    rows = max(1, math.ceil(len(images) / columns))
+    fig, axes = plt.subplots(rows, columns, squeeze=False, figsize=(1.6 * columns + 0.2, 2.1 * rows + 0.4))
+    for ax in axes.flat:
+        ax.axis("off")
+    for ax, image, caption in zip(axes.flat, images, captions):
+        ax.imshow(image[..., 0] if image.shape[-1] == 1 else image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+        ax.set_title(caption, fontsize=7)
+    if not len(images):
+        axes[0, 0].text(0.5, 0.5, "no keyframes found", ha="center", va="center", fontsize=9)
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=110)
+
+
+def save_timeline(
+    path: Path,
+    n_frames: int,
+    keyframes: Sequence[int],
+    scores: Sequence[float],
+    first_candidate: int,
+    fps: float | None,
+    labels: Sequence[int] | None,
+    title: str,
+) -> Path:
+    """The video's segments as a bar over its frames, the keyframes' scores as stems above it and, when
+    there are labels, the labelled segments as a second bar beside it.
+
+    Args:
+        n_frames: the original video's frames; keyframes, labels and ``first_candidate`` (the first
+            frame a keyframe may be, before it the conditioning frames) count them from 0.
+        scores: one per keyframe, in [0, 1].
+        fps: the video's frame rate, for a seconds axis; None without one.
+    """
+    rows = {"found": (keyframes, PREDICTED)} | ({"labels": (labels, TRUE)} if labels is not None else {})
+    fig, (stems, bars) = plt.subplots(
+        2, 1, sharex=True, figsize=(8, 1.4 + 0.35 * len(rows)), gridspec_kw={"height_ratios": [1.4, 0.5 * len(rows)]}
+    )
+    stems.vlines(keyframes, 0, scores, colors=[rgb(PREDICTED)])
+    stems.plot(keyframes, scores, "o", color=rgb(PREDICTED), markersize=3)
+    stems.set_ylim(0, 1.05)
+    stems.set_ylabel("score", fontsize=7)
+    stems.set_title(title, fontsize=8)
+    for y, (name, (marks, colour)) in enumerate(reversed(rows.items())):
+        edges = [0, *sorted(marks), n_frames]
+        spans = [(left, right - left) for left, right in zip(edges[:-1], edges[1:]) if right > left]
+        shades = [rgb(colour) + ((0.35 if i % 2 else 0.65),) for i in range(len(spans))]
+        bars.broken_barh(spans, (y + 0.1, 0.8), facecolors=shades)
+        bars.vlines(list(marks), y + 0.05, y + 0.95, colors=[rgb(colour)], linewidth=1.5)
+    bars.broken_barh([(0, first_candidate)], (0, len(rows)), facecolors=[rgb(CONDITION) + (0.6,)])
+    bars.set_yticks([y + 0.5 for y in range(len(rows))], list(reversed(rows)), fontsize=7)
+    bars.set_xlim(0, n_frames)
+    bars.set_xlabel("frame of the original video", fontsize=7)
+    if fps:
+        seconds = stems.secondary_xaxis("top", functions=(lambda f: f / fps, lambda s: s * fps))
+        seconds.set_xlabel("seconds", fontsize=7)
+        seconds.tick_params(labelsize=6)
+    for ax in (stems, bars):
+        ax.tick_params(labelsize=6)
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=110)
+
+
+def position_strip(width: int, n_frames: int, now: int, found: Sequence[int], labels: Sequence[int]) -> np.ndarray:
+    """(STRIP_HEIGHT, width, 3) uint8: where frame ``now`` of ``n_frames`` is, labels and keyframes ticked."""
+    def column(frame: int) -> int:
+        return min(width - 1, frame * width // max(n_frames, 1))
+
+    strip = np.full((STRIP_HEIGHT, width, 3), 40, dtype=np.uint8)
+    strip[:, : column(now)] = 90  # the part played so far
+    half = STRIP_HEIGHT // 2
+    for marks, colour, rows in ((labels, TRUE, slice(None, half)), (found, PREDICTED, slice(half, None))):
+        for frame in marks:
+            strip[rows, column(frame)] = colour
+    strip[:, column(now)] = 255
+    return strip
+
+
+def save_annotated_gif(
+    path: Path, frames: np.ndarray, n_cond: int, found: Sequence[int], labels: Sequence[int] | None, duration_ms: float
+) -> Path:
+    """The video as the model saw it, every frame bordered (keyframes red, labels green, both yellow,
+    the first ``n_cond`` grey) over a bar of where it is in the video.
+
+    Args:
+        frames: (T, H, W, C) uint8 kept frames, C = 1 or 3.
+        found, labels: kept-frame indices.
+        duration_ms: how long each frame shows.
+    """
+    clip = torch.from_numpy(np.ascontiguousarray(frames)).permute(0, 3, 1, 2).float().div_(255.0)
+    labels = labels or []
+    future = lambda marks: [k - n_cond for k in marks]  # noqa: E731  (marked_frames counts after the conditioning frames)
+    marked = marked_frames(clip, n_cond, future(labels), future(found))  # (T, h, w, 3)
+    strips = np.stack([position_strip(marked.shape[2], len(frames), now, found, labels) for now in range(len(frames))])
+    return save_keyframe_gif(path, np.concatenate([marked, strips], axis=1)[None], duration_ms=duration_ms, side=128)

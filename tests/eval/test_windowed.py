@@ -1,0 +1,107 @@
+"""Keyframes of whole videos: an oracle discoverer that reads each frame's number from its picture
+shows that keyframes.json's frames are the original file's frames, at frame stride 1 and 2; a long
+clip's known turns survive the windows' merge; a crash leaves no half-written folder."""
+
+import json
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import torch
+
+from keyin.data.imports import ImportSpec, read_videos
+from keyin.data.sources import decoded_frames
+from keyin.data.windows import kept_keyframes
+from keyin.eval import windowed
+from keyin.eval.windowed import FILES, discover_video, discover_videos, folder_names
+from tests.videos import EVENTS, FPS, LEVEL0, LEVEL_STEP, frame_numbers, frames, write_video
+
+N_COND, N_FUTURE = 2, 10
+
+
+def spec(frame_stride: int, window_stride: int = 5) -> ImportSpec:
+    return ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=N_FUTURE, frame_stride=frame_stride,
+                      window_stride=window_stride)
+
+
+def oracle(targets):
+    """A discoverer that marks the future frames whose picture shows one of the original frames
+    ``targets``, and a scorer that scores each future frame its number / 1000."""
+    def discoverer(clips, future_length):
+        return [[p for p, number in enumerate(frame_numbers(clip)[N_COND:][:length]) if number in targets]
+                for clip, length in zip(clips, future_length.tolist())]
+
+    def scorer(clips, future_length):
+        return torch.tensor([frame_numbers(clip)[N_COND:] for clip in clips], dtype=torch.float32) / 1000
+
+    return discoverer, scorer
+
+
+@pytest.fixture(scope="module")
+def video_file(tmp_path_factory):
+    return write_video(tmp_path_factory.mktemp("windowed") / "take.mp4", frames(40))
+
+
+@pytest.mark.parametrize("frame_stride", [1, 2])
+def test_keyframes_are_the_original_files_frames_at_stride(video_file, frame_stride):
+    (video,), _, _ = read_videos(video_file, spec(frame_stride), None, None, progress=False)
+    targets = {kept * frame_stride for kept in kept_keyframes(EVENTS, frame_stride, len(video.frames))}
+    found = discover_video(video, *oracle(targets), N_COND, N_FUTURE, frame_stride)
+    assert [k.frame for k in found] == sorted(targets)  # each event once, though several windows saw it
+    assert [k.time for k in found] == [frame / FPS for frame in sorted(targets)]
+    assert [k.score for k in found] == [frame / 1000 for frame in sorted(targets)]
+    originals = list(decoded_frames(video_file))
+    levels = [float(originals[k.frame].mean()) for k in found]
+    assert np.round((np.array(levels) - LEVEL0) / LEVEL_STEP).astype(int).tolist() == sorted(targets)
+
+
+def test_a_long_clips_known_turns_survive_the_merge_of_its_windows(tmp_path):
+    """A 240-frame clip whose frame t is grey level t; the oracle marks the turns in every window
+    but is wrong at the windows' edges (misses a turn within a frame of them, adds one on the first
+    frame a window may mark); the merge keeps each turn once and drops the edges' mistakes."""
+    turns = [11, 30, 41, 57, 70, 88, 99, 120, 131, 152, 160, 181, 195, 210, 226]
+    np.save(tmp_path / "long.npy", np.broadcast_to(np.arange(240, dtype=np.uint8)[:, None, None, None], (240, 8, 8, 1)))
+    (video,), _, _ = read_videos(tmp_path / "long.npy", spec(1, window_stride=4), None, None, progress=False)
+
+    def edge_blind(clips, future_length):
+        numbers = [np.round(clip.mean(dim=(1, 2, 3)).numpy() * 255).astype(int).tolist() for clip in clips]
+        return [sorted({0, *(p for p, n in enumerate(row[N_COND:]) if n in turns and 1 < p < length - 3)})
+                for row, length in zip(numbers, future_length.tolist())]
+
+    found = discover_video(video, edge_blind, lambda clips, lengths: torch.ones(len(clips), N_FUTURE), N_COND,
+                           N_FUTURE, frame_stride=1)
+    assert len(video.starts) == 58  # starts 0, 4, …, 228
+    assert [k.frame for k in found] == [N_COND, *turns]  # frame 2: the first window's own first frame
+
+
+def test_every_video_gets_a_whole_folder_of_files(video_file, tmp_path):
+    videos, _, _ = read_videos(video_file.parent, spec(2), {"take.mp4": EVENTS}, None, progress=False)
+    summary = discover_videos(videos, *oracle({6, 16}), tmp_path, {"method": "oracle"}, N_COND, N_FUTURE, 2, 5,
+                              progress=False)
+    assert summary["videos"] == {"take.mp4": {"folder": "take.mp4", "keyframes": 2}} and summary["kept_frames"] == 20
+    folder = tmp_path / "take.mp4"
+    assert sorted(p.name for p in folder.iterdir()) == sorted(FILES)
+    record = json.loads((folder / "keyframes.json").read_text())
+    assert [k["frame"] for k in record["keyframes"]] == [6, 16] and record["labels"] == EVENTS
+    assert record["fps"] == FPS and record["frames"] == 40 and record["first_candidate"] == 4
+    assert record["windows"] == {"count": 3, "stride": 10, "starts": [0, 10, 20]}
+    assert iio.imread(folder / "annotated.gif", index=None).shape[0] == 20
+    for picture in ("contact_sheet.png", "timeline.png"):
+        assert iio.imread(folder / picture).ndim == 3
+
+
+def test_a_crash_while_writing_leaves_no_folder_and_no_temporary(video_file, tmp_path, monkeypatch):
+    videos, _, _ = read_videos(video_file, spec(1), None, None, progress=False)
+
+    def fail(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(windowed, "save_timeline", fail)
+    with pytest.raises(OSError):
+        discover_videos(videos, *oracle(set()), tmp_path, {}, N_COND, N_FUTURE, 1, 5, progress=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_folder_names_are_safe_and_unique():
+    assert folder_names(["clips.npz[frames][3]", "a b.mp4", "a?b.mp4", "..", "demos.hdf5[demo_0]"]) == [
+        "clips.npz_frames_3", "a_b.mp4", "a_b.mp4-2", "video", "demos.hdf5_demo_0"]
