@@ -1,5 +1,6 @@
-"""PushingGenerator: clip layout, determinism, spawn workers, planning tasks."""
+"""PushingGenerator: clip layout, determinism, today's clips pinned, spawn workers, planning tasks."""
 
+import hashlib
 import multiprocessing
 from dataclasses import asdict
 
@@ -62,6 +63,31 @@ def test_deterministic_per_seed_and_index(clips):
     for name, value in clips[1][0].items():
         assert np.array_equal(value, again[name]), name
     assert not np.array_equal(GENERATOR.generate(1, seed=8)[0]["puck"], again["puck"])
+
+
+# The first two clips of seed 7 as the default generator made them before the timing options
+# existed (2026-12-01): every array's bytes, and each push's completion frame.
+PINNED_CLIPS = {
+    0: ("24f9cdc1e80b15014eb5081f8ad418164c246441cb73dd03013ae932e0e9a99f", [4, 8, 12, 17, 23, 29]),
+    1: ("994ddf3e0f3c88cd75d1596750791989db3fec15a63758e12465901c1914d49c", [4, 9, 15, 19, 23, 27]),
+}
+
+
+def clip_digest(arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 of a clip's arrays, names and bytes in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        digest.update(name.encode())
+        digest.update(np.ascontiguousarray(arrays[name]).tobytes())
+    return digest.hexdigest()
+
+
+@pytest.mark.parametrize("index", sorted(PINNED_CLIPS))
+def test_default_generator_makes_todays_clips(clips, index):
+    arrays, _ = clips[index]
+    digest, completions = PINNED_CLIPS[index]
+    assert arrays["completions"].tolist() == completions
+    assert clip_digest(arrays) == digest
 
 
 def _generate(args):
