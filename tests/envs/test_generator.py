@@ -154,14 +154,41 @@ def test_keyin_generate_writes_the_same_tasks_as_the_planning_split(tmp_path):
         np.testing.assert_array_equal(written[name], value, err_msg=name)
 
 
+# The timing options came after dataset=pushing was generated: pushing.yaml leaves them unwritten,
+# at the generator's defaults (its regular timing), so that the folders generated before still
+# match its config (keyin-generate refuses a folder generated with another one).
+TIMING_OPTIONS = {"push_speed_spread", "max_pause_frames", "pause_speed"}
+
+
 def test_config_mirrors_the_generator():
     from hydra.utils import instantiate
     from omegaconf import OmegaConf
 
     config = OmegaConf.load(CONFIGS / "dataset" / "pushing.yaml")
     assert config.n_cond == PushingGenerator.n_cond == 1 and config.n_keyframes == 6
-    assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR))
+    assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR)) - TIMING_OPTIONS
     assert instantiate(config.generator) == GENERATOR
+
+
+def test_irregular_clips_label_each_push_completion_before_its_pause():
+    from hydra import compose, initialize_config_module
+    from hydra.utils import instantiate
+
+    from keyin.cli.app import CONFIG_MODULE
+
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        generator = instantiate(compose("generate", overrides=["dataset=pushing_irregular"]).dataset.generator)
+    length = generator.clip_length
+    for index in range(3):
+        arrays, _ = generator.generate(index, seed=7)
+        demo, _ = generator.demo(index, seed=7)
+        completions = arrays["completions"]
+        assert np.array_equal(completions, demo.saved_completions(generator.frame_skip))
+        assert np.array_equal(np.flatnonzero(arrays["keyframes"]), completions[completions < length])
+        for frame, subgoal, pause in zip(completions, arrays["subgoals"], demo.pauses):
+            if frame + pause < length:  # the keyframe and the paused frames after it show the puck at the subgoal
+                puck = arrays["puck"][frame:frame + pause + 1]
+                assert np.linalg.norm(puck - subgoal, axis=1).max() < 0.08
 
 
 def test_demos_from_one_layout_start_there_and_go_round_either_end():
