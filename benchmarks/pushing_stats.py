@@ -2,7 +2,7 @@
 
     python benchmarks/pushing_stats.py --demos 400 --tasks 240 --figure docs/img/pushing_demos.png
     python benchmarks/pushing_stats.py --dataset pushing pushing_irregular --split val --demos 200 \
-        --tasks 0 --out benchmarks/results/pushing_irregular_stats.md
+        --tasks 240 --out benchmarks/results/pushing_irregular_stats.md
 
 Prints a Markdown table with a column per dataset (``--dataset``: keyin/conf/dataset/<name>.yaml's
 generator), from the demos of the ``--split``'s first clips (physics only, the same labels as the
