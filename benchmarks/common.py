@@ -8,10 +8,11 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-from omegaconf import OmegaConf
+from hydra import compose, initialize_config_module
+from omegaconf import DictConfig
 from torch.utils.data import DataLoader, Subset
 
-import keyin.conf
+from keyin.cli.app import CONFIG_MODULE
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 
@@ -44,10 +45,17 @@ def clip_arguments(parser: argparse.ArgumentParser, clips: int) -> argparse.Argu
     return parser
 
 
+def dataset_config(dataset_name: str) -> DictConfig:
+    """keyin/conf/dataset/<name>.yaml as the commands compose it, its defaults list included
+    (``pushing_irregular`` extends ``pushing``)."""
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        return compose("eval", overrides=[f"dataset={dataset_name}"]).dataset
+
+
 def split_batch(dataset_name: str, split: str, clips: int, data_dir: str) -> tuple[Any, dict[str, Any]]:
-    """The dataset's config (keyin/conf/dataset/<name>.yaml) and the first ``clips`` clips of one of
-    its generated splits (``<data_dir>/<name>/``) as one batch."""
-    dataset = OmegaConf.load(Path(keyin.conf.__file__).parent / "dataset" / f"{dataset_name}.yaml")
+    """The dataset's config (:func:`dataset_config`) and the first ``clips`` clips of one of its
+    generated splits (``<data_dir>/<name>/``) as one batch."""
+    dataset = dataset_config(dataset_name)
     image = (dataset.image_size, dataset.image_size, dataset.channels)
     shards = ShardClips(split_files(Path(data_dir) / dataset_name, split), image, dataset.n_cond, dataset.n_future)
     shards = Subset(shards, range(min(clips, len(shards))))

@@ -1,59 +1,123 @@
-"""Measured statistics of the pushing dataset and planning tasks for docs/pushing.md.
+"""Measured statistics of the pushing datasets and planning tasks for docs/pushing.md.
 
     python benchmarks/pushing_stats.py --demos 400 --tasks 240 --figure docs/img/pushing_demos.png
+    python benchmarks/pushing_stats.py --dataset pushing pushing_irregular --split val --demos 200 \
+        --tasks 240 --out benchmarks/results/pushing_irregular_stats.md
 
-Prints Markdown: acceptance rate, push-length histogram, pushes per clip, detour sides, clip
-lengths, the initial shortest-path distance over the planning tasks (the paper's "Initial" row,
-1.32 ± 0.06), and the Random / Constant keyframe-F1 sanity rows (REFERENCE §6.2). Draws a grid of
+Prints a Markdown table with a column per dataset (``--dataset``: keyin/conf/dataset/<name>.yaml's
+generator), from the demos of the ``--split``'s first clips (physics only, the same labels as the
+generated clips): acceptance rate, the histograms of push lengths, of pauses and of the gaps between
+labels, keyframes per clip, detour sides, demo lengths and the fraction of padded clips, the
+Random / Constant-c keyframe F1 (REFERENCE §6.2's sanity rows; exact over all labels and the
+interior column of docs/evaluation.md), and the initial shortest-path distance over ``--tasks``
+planning tasks (the paper's "Initial" row, 1.32 ± 0.06). Draws a grid of the first dataset's
 sample demos with subgoals and keyframes marked.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import tempfile
 import time
+from datetime import date
 from pathlib import Path
 
 import numpy as np
+import torch
+from hydra.utils import instantiate
 
+from common import cpu_model, dataset_config, publish
 from keyin.data.generate import split_seed
 from keyin.data.hdf5 import load_arrays
 from keyin.data.pushing import PushingGenerator, write_planning_tasks
+from keyin.decode.baselines import ConstantKeyframes, RandomKeyframes
 from keyin.envs.demonstrator import detour_polyline
 from keyin.envs.geometry import apply_homography, wall_corners
-from keyin.eval.f1 import keyframe_scores
+from keyin.eval.f1 import column_scores, keyframe_scores
 
 
 def demo_statistics(generator: PushingGenerator, count: int, seed: int) -> dict:
     """Run ``count`` accepted demos (no rendering) and collect their statistics."""
-    lengths, attempts, sides, saved, pushes_in_clip = [], [], [], [], []
+    lengths, gaps, pauses, attempts, sides, saved, pushes_in_clip = [], [], [], [], [], [], []
     truth = []
     n = generator.n_future
+    start = time.perf_counter()
     for index in range(count):
         demo, tries = generator.demo(index, seed)
-        push = demo.push_lengths(generator.frame_skip)
         completions = demo.saved_completions(generator.frame_skip)
-        lengths.append(push)
+        lengths.append(demo.push_lengths(generator.frame_skip))
+        gaps.append(np.diff(completions, prepend=0))
+        pauses.append(demo.pauses[:-1])
         attempts.append(tries)
         sides.append(demo.side)
         saved.append(int(completions[-1]))
         future = completions - generator.n_cond  # future index of each keyframe
         truth.append([int(f) for f in future if f < n])
         pushes_in_clip.append(len(truth[-1]))
-    return {"lengths": np.array(lengths), "attempts": np.array(attempts), "sides": np.array(sides),
-            "saved": np.array(saved), "truth": truth, "pushes_in_clip": np.array(pushes_in_clip)}
+    return {"lengths": np.array(lengths), "gaps": np.array(gaps), "pauses": np.array(pauses),
+            "attempts": np.array(attempts), "sides": np.array(sides), "saved": np.array(saved),
+            "truth": truth, "pushes_in_clip": np.array(pushes_in_clip),
+            "seconds_per_demo": (time.perf_counter() - start) / count}
 
 
-def baseline_f1(truth: list[list[int]], valid_future: np.ndarray, n: int, seed: int = 0) -> dict:
-    """Random (6 distinct valid frames) and Constant (c = 4, 5) keyframe F1 against the ground truth."""
-    rng = np.random.default_rng(seed)
-    random_picks = [sorted(rng.choice(v, size=min(6, v), replace=False).tolist()) for v in valid_future]
-    scores = {"random": keyframe_scores(random_picks, truth, n)["f1"]}
-    for offset in (4, 5):
-        picks = [list(range(offset - 1, v, offset)) for v in valid_future]
-        scores[f"constant_{offset}"] = keyframe_scores(picks, truth, n)["f1"]
-    return scores
+def baseline_f1(
+    truth: list[list[int]], future_length: np.ndarray, n: int, offsets: list[int], seed: int = 0
+) -> tuple[tuple[float, float], dict[int, tuple[float, float]]]:
+    """(exact F1 over all labels, interior F1) of Random (6 distinct valid frames) and of Constant
+    (every c-th frame) for each c in ``offsets``."""
+    lengths = torch.as_tensor(future_length)
+
+    def scores(method: RandomKeyframes | ConstantKeyframes) -> tuple[float, float]:
+        picks = method(None, lengths)  # neither baseline looks at the frames
+        return keyframe_scores(picks, truth, n)["f1"], column_scores(picks, truth, lengths.tolist(), n)["f1_interior"]
+
+    return scores(RandomKeyframes(6, seed)), {c: scores(ConstantKeyframes(c)) for c in offsets}
+
+
+def histogram(values: np.ndarray) -> str:
+    """``value: count (share)`` for each value that occurs."""
+    keys, counts = np.unique(values, return_counts=True)
+    return ", ".join(f"{k}: {c} ({c / values.size:.0%})" for k, c in zip(keys.tolist(), counts.tolist()))
+
+
+def statistics_rows(stats: dict, n: int, n_keyframes: int, offsets: list[int]) -> dict[str, str]:
+    """The table's rows for one dataset's :func:`demo_statistics`, in order."""
+    lengths, gaps, saved, attempts = stats["lengths"], stats["gaps"], stats["saved"], stats["attempts"]
+    rows = {
+        "demos (s per demo, physics only)": f"{len(saved)} ({stats['seconds_per_demo']:.3f})",
+        "acceptance rate": f"{len(attempts) / attempts.sum():.1%} ({attempts.sum()} drawn)",
+        "push length in saved frames": f"{histogram(lengths)}; mean {lengths.mean():.2f}",
+        "mean length of each push": ", ".join(f"{v:.2f}" for v in lengths.mean(0)),
+        "pause after each push but the last, saved frames": f"{histogram(stats['pauses'])}; mean {stats['pauses'].mean():.2f}",
+        "gap between labels (the first from the conditioning frame)": f"{histogram(gaps)}; mean {gaps.mean():.2f} ± {gaps.std():.2f}",
+        "demo length after the first frame": f"mean {saved.mean():.1f}, {saved.min()}-{saved.max()}",
+        f"padded clips (demo ends before N = {n})": f"{np.mean(saved < n):.1%}",
+        "truncated clips (demo longer than N, keyframes lost)": f"{np.mean(saved > n):.1%}",
+        "keyframes inside the clip": f"{histogram(stats['pushes_in_clip'])}; mean {stats['pushes_in_clip'].mean():.2f}",
+        "detour side +1 / -1": f"{np.mean(stats['sides'] == 1):.1%} / {np.mean(stats['sides'] == -1):.1%}",
+    }
+    random, constant = baseline_f1(stats["truth"], np.minimum(saved, n), n, offsets)
+    rows["Random: F1 interior (exact, all labels)"] = f"{random[1]:.3f} ({random[0]:.3f})"
+    smallest = n // (n_keyframes + 1) + 1  # the smallest c that places at most M keyframes in a full clip
+    for c, (exact, interior) in constant.items():
+        note = " (more than M keyframes)" if c < smallest else ""
+        rows[f"Constant c = {c}{note}: F1 interior (exact, all labels)"] = f"{interior:.3f} ({exact:.3f})"
+    best = max((c for c in offsets if c >= smallest), key=lambda c: constant[c][1])
+    rows["best Constant with at most M keyframes: F1 interior"] = f"**{constant[best][1]:.3f}** (c = {best})"
+    return rows
+
+
+def planning_rows(generator: PushingGenerator, tasks: int, seed: int) -> dict[str, str]:
+    """The initial shortest-path distance over ``tasks`` planning tasks (the paper's "Initial")."""
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "planning.h5"
+        write_planning_tasks(path, generator, n=tasks, seed=seed)
+        distance = load_arrays(path, ("initial_distance",))["initial_distance"]
+    return {f"initial shortest-path distance, {tasks} planning tasks (paper: 1.32 ± 0.06)":
+            f"{distance.mean():.3f} ± {distance.std():.3f} ({distance.min():.2f}-{distance.max():.2f}; "
+            f"{time.perf_counter() - start:.0f} s)"}
 
 
 def draw_figure(generator: PushingGenerator, path: Path, rows: int, seed: int) -> None:
@@ -106,46 +170,35 @@ def draw_figure(generator: PushingGenerator, path: Path, rows: int, seed: int) -
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dataset", nargs="+", default=["pushing"], help="keyin/conf/dataset/<name>.yaml, one column each")
+    parser.add_argument("--split", default="train", help="whose clips' demos are measured")
     parser.add_argument("--demos", type=int, default=400)
-    parser.add_argument("--tasks", type=int, default=240)
+    parser.add_argument("--tasks", type=int, default=240, help="planning tasks (0: none)")
+    parser.add_argument("--offsets", type=int, nargs="+", default=list(range(3, 12)), help="Constant's spacings c")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--figure", type=Path, default=None)
     parser.add_argument("--figure-rows", type=int, default=4)
+    parser.add_argument("--out", type=Path, help="also write the Markdown here")
     args = parser.parse_args()
-    generator = PushingGenerator()
-    n = generator.n_future
-
-    start = time.perf_counter()
-    stats = demo_statistics(generator, args.demos, split_seed(args.seed, "train"))
-    lengths = stats["lengths"]
-    print(f"## {args.demos} training demos (seed {args.seed}; {time.perf_counter() - start:.0f} s)\n")
-    attempts = stats["attempts"]
-    print(f"- acceptance rate: {len(attempts) / attempts.sum():.1%} ({attempts.sum()} demos drawn)")
-    histogram = {int(k): int(c) for k, c in zip(*np.unique(lengths, return_counts=True))}
-    print(f"- push length (saved frames): histogram {histogram}, mean {lengths.mean():.2f}")
-    print(f"- mean push length by push 1-6: {np.round(lengths.mean(0), 2).tolist()}")
-    print(f"- pushes per demo: {lengths.shape[1]}; keyframes inside the clip (future index < {n}): "
-          f"mean {stats['pushes_in_clip'].mean():.2f}, histogram "
-          f"{dict(zip(*[a.tolist() for a in np.unique(stats['pushes_in_clip'], return_counts=True)]))}")
-    sides = stats["sides"]
-    print(f"- detour side +1 / -1: {np.mean(sides == 1):.1%} / {np.mean(sides == -1):.1%}")
-    saved = stats["saved"]
-    print(f"- demo length (saved frames after the first): mean {saved.mean():.1f}, min {saved.min()}, "
-          f"max {saved.max()}; truncated to N = {n}: {np.mean(saved > n):.1%}")
-    valid_future = np.minimum(saved, n)
-    for name, value in baseline_f1(stats["truth"], valid_future, n).items():
-        print(f"- {name} keyframe F1 (exact): {value:.3f}")
-
-    start = time.perf_counter()
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "planning.h5"
-        write_planning_tasks(path, generator, n=args.tasks, seed=args.seed)
-        tasks = load_arrays(path, ("initial_distance", "start", "goal"))
-    distance = tasks["initial_distance"]
-    print(f"\n## {args.tasks} planning tasks ({time.perf_counter() - start:.0f} s)\n")
-    print(f"- initial shortest-path distance: {distance.mean():.3f} ± {distance.std():.3f} "
-          f"(min {distance.min():.3f}, max {distance.max():.3f}); paper: 1.32 ± 0.06")
+    load = os.getloadavg()[0]
+    columns = {}
+    for name in args.dataset:
+        config = dataset_config(name)
+        generator = instantiate(config.generator)
+        rows = statistics_rows(demo_statistics(generator, args.demos, split_seed(args.seed, args.split)),
+                               generator.n_future, config.n_keyframes, args.offsets)
+        columns[name] = {**rows, **(planning_rows(generator, args.tasks, args.seed) if args.tasks else {})}
+    command = " ".join(["python benchmarks/pushing_stats.py", f"--dataset {' '.join(args.dataset)}", f"--split {args.split}",
+                        f"--demos {args.demos}", f"--tasks {args.tasks}"])
+    lines = [f"## Pushing demonstrations: {args.demos} demos of the {args.split} clips (data seed {args.seed})\n",
+             f"- command: `{command}`",
+             f"- machine: {cpu_model()}, {os.cpu_count()} cores, torch {torch.__version__}, {date.today()}; "
+             f"load average before / after: {load:.2f} / {os.getloadavg()[0]:.2f}\n",
+             "| statistic | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    lines += [f"| {row} | " + " | ".join(column[row] for column in columns.values()) + " |" for row in columns[args.dataset[0]]]
+    publish("\n".join(lines), args.out)
     if args.figure:
+        generator = instantiate(dataset_config(args.dataset[0]).generator)
         draw_figure(generator, args.figure, args.figure_rows, split_seed(args.seed, "val"))
         print(f"\nfigure: {args.figure} ({args.figure.stat().st_size / 1024:.0f} KiB)")
 

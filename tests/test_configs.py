@@ -147,7 +147,7 @@ def test_every_experiment_composes_at_every_scale_and_every_job_of_its_sweep_at_
 
 @pytest.mark.parametrize("scale", options("scale") + [f"../scale_dataset/{name}" for name in options("scale_dataset")])
 def test_a_scale_preset_holds_sizes_and_budgets_only(scale):
-    keys = set(OmegaConf.load(CONFIGS / "scale" / f"{scale}.yaml"))
+    keys = set(OmegaConf.load(CONFIGS / "scale" / f"{scale}.yaml")) - {"defaults"}  # a preset may extend another
     assert keys <= set(SCALE_KEYS), keys - set(SCALE_KEYS)
 
 
@@ -172,3 +172,20 @@ def test_model_keyin_is_the_papers_method_at_every_scale():
 def test_a_method_choice_given_where_keyin_0_1_kept_it_says_where_it_lives_now(tmp_path, override, now):
     line = error_line(run("train", override, "logger=none", cwd=tmp_path))
     assert f"lives in {now} now: set {now}=... instead" in line and "scale= holds sizes and budgets only" in line
+
+
+def test_pushing_irregular_is_pushing_with_irregular_timing():
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        regular = resolve("train", ["dataset=pushing", "scale=cpu"])
+        irregular = resolve("train", ["dataset=pushing_irregular", "scale=cpu"])
+        table = resolve("train", ["experiment=pushing_table1", "dataset=pushing_irregular"])
+    timing = {"push_speed", "push_speed_spread", "min_push_frames", "max_push_frames", "max_pause_frames", "pause_speed"}
+    generator = irregular["dataset"]["generator"]
+    assert {key: generator[key] for key in set(generator) - timing} == {
+        key: value for key, value in regular["dataset"]["generator"].items() if key not in timing
+    }
+    assert (generator["min_push_frames"], generator["max_push_frames"], generator["max_pause_frames"]) == (3, 9, 2)
+    assert irregular["dataset"]["name"] == "pushing_irregular"  # its own data folder, data/pushing_irregular
+    assert irregular["dataset"]["max_offset"] == generator["max_push_frames"] + generator["max_pause_frames"]
+    assert irregular["scale"] == regular["scale"]  # scale=cpu's 64x64 pushing sizes
+    assert table["dataset"]["name"] == "pushing_irregular"

@@ -32,7 +32,9 @@ PLANNING_SPLIT = "planning"  # the fixed planning tasks (REFERENCE §5.2), a spl
 class PushingGenerator:
     """Pushing clip generator; plain numbers only, so it pickles into spawn workers.
 
-    The fields mirror ``keyin/conf/dataset/pushing.yaml`` (``generator:``); docs/pushing.md explains each.
+    The fields mirror ``keyin/conf/dataset/pushing.yaml`` (``generator:``), the timing options
+    (``push_speed_spread``, ``max_pause_frames``, ``pause_speed``) only in ``pushing_irregular.yaml``;
+    docs/pushing.md explains each.
     """
 
     image_size: int = 64
@@ -74,6 +76,9 @@ class PushingGenerator:
     lateral_jitter: float = 0.03
     wall_clearance: float = 0.02
     push_speed: float = 0.42
+    push_speed_spread: float = 1.0  # the timing options: their defaults are dataset=pushing's regular timing
+    max_pause_frames: int = 0
+    pause_speed: float = 0.0
     move_speed: float = 1.0
     contact_gap: float = 0.02
     reach_tolerance: float = 0.02

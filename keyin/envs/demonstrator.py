@@ -10,9 +10,15 @@
    subgoal (orbiting the puck, on the side away from the wall, when it is in the way), then push
    along that line, steering back onto it, slowing down so the puck stops at the subgoal. The
    raw frame at which the puck comes within ``reach_tolerance`` of the subgoal completes the push.
-3. The video keeps every ``frame_skip``-th raw frame; a push completed at raw frame ``c`` ends at
+   Each push has its own speed, log-uniform in ``push_speed`` · [1 / f, f] with f =
+   ``push_speed_spread`` (f = 1: every push at ``push_speed``).
+3. After each push but the last the demonstrator may pause for U{0..``max_pause_frames``} saved
+   frames: the pusher backs away from the puck at ``pause_speed`` (0: it waits) and the puck stays
+   where the push left it. The next push starts after the pause.
+4. The video keeps every ``frame_skip``-th raw frame; a push completed at raw frame ``c`` ends at
    saved frame ``ceil(c / frame_skip)``. A demo is kept only if every push spans
-   ``min_push_frames``..``max_push_frames`` saved frames (which also bounds its length).
+   ``min_push_frames``..``max_push_frames`` saved frames counted from the end of the pause before
+   it (which also bounds its length).
 """
 
 from __future__ import annotations
@@ -29,7 +35,8 @@ from keyin.envs.layout import Layout
 
 @dataclass(frozen=True)
 class DemoParams:
-    """Demonstrator constants (plain numbers; mirrored in ``keyin/conf/dataset/pushing.yaml``)."""
+    """Demonstrator constants (plain numbers; mirrored in ``keyin/conf/dataset/pushing.yaml``, the
+    timing options ``push_speed_spread``, ``max_pause_frames``, ``pause_speed`` in ``pushing_irregular.yaml``)."""
 
     n_pushes: int = 6
     detour_margin: float = 0.10
@@ -37,7 +44,10 @@ class DemoParams:
     share_jitter: float = 0.2  # each share is scaled by U[1 - j, 1 + j]
     lateral_jitter: float = 0.03
     wall_clearance: float = 0.02
-    push_speed: float = 0.42  # units / s while pushing
+    push_speed: float = 0.42  # units / s while pushing (the median of each push's own speed)
+    push_speed_spread: float = 1.0  # each push's speed is push_speed * f^U[-1, 1]
+    max_pause_frames: int = 0  # after each push but the last, a pause of U{0..k} saved frames
+    pause_speed: float = 0.0  # units / s the pusher backs away from the puck while paused (0: waits)
     move_speed: float = 1.0  # units / s while walking to the puck
     contact_gap: float = 0.02  # the pre-push point is this far behind contact
     reach_tolerance: float = 0.02
@@ -56,6 +66,7 @@ class Demo:
         puck, pusher: (T + 1, 2) positions.
         actions: (T, 2) actions in [-1, 1]; action t moves frame t to frame t + 1.
         completions: (P,) raw frame at which each push completed.
+        pauses: (P,) saved frames the demonstrator paused after each push (the last: 0).
         subgoals: (n_pushes, 2); the last is the goal.
         side: +1 / -1, the wall end the puck goes round (in the wall's own frame).
         layout: the episode's layout.
@@ -66,6 +77,7 @@ class Demo:
     pusher: np.ndarray
     actions: np.ndarray
     completions: np.ndarray
+    pauses: np.ndarray
     subgoals: np.ndarray
     side: int
     layout: Layout
@@ -75,8 +87,10 @@ class Demo:
         return -(-self.completions // frame_skip)
 
     def push_lengths(self, frame_skip: int) -> np.ndarray:
-        """(P,) saved frames per push (the first counts from saved frame 0)."""
-        return np.diff(self.saved_completions(frame_skip), prepend=0)
+        """(P,) saved frames per push, from the end of the pause before it (the first from saved
+        frame 0) to its completion."""
+        gaps = np.diff(self.saved_completions(frame_skip), prepend=0)
+        return gaps - np.concatenate([[0], self.pauses[:-1]])
 
 
 def detour_polyline(layout: Layout, side: int, puck_radius: float, margin: float) -> np.ndarray:
@@ -118,6 +132,14 @@ def draw_subgoals(
     return None
 
 
+def draw_timing(rng: np.random.Generator, params: DemoParams) -> tuple[np.ndarray, np.ndarray]:
+    """Each push's speed (n_pushes,) in units / s and the pause after it (n_pushes,) in saved
+    frames; the last push has no pause."""
+    speeds = params.push_speed * params.push_speed_spread ** rng.uniform(-1.0, 1.0, params.n_pushes)
+    pauses = np.append(rng.integers(0, params.max_pause_frames + 1, params.n_pushes - 1), 0)
+    return speeds, pauses
+
+
 class PushController:
     """Walk behind the puck, then push it along the line to the subgoal (one raw step at a time)."""
 
@@ -128,8 +150,8 @@ class PushController:
         self.contact = puck_radius + pusher_radius
         self.orbit = self.contact + params.contact_gap + 0.02
 
-    def act(self, puck: np.ndarray, pusher: np.ndarray, subgoal: np.ndarray) -> np.ndarray:
-        """(2,) action in [-1, 1] for the next raw step."""
+    def act(self, puck: np.ndarray, pusher: np.ndarray, subgoal: np.ndarray, push_speed: float) -> np.ndarray:
+        """(2,) action in [-1, 1] for the next raw step, pushing at most at ``push_speed``."""
         offset = subgoal - puck
         distance = float(np.linalg.norm(offset))
         direction = offset / max(distance, 1e-9)
@@ -138,11 +160,17 @@ class PushController:
         lateral = abs(float(rel[0] * direction[1] - rel[1] * direction[0]))
         if behind > 0.5 * self.contact and lateral < 0.02 and behind < self.orbit + 0.02:
             # Push: command the speed that lets the puck coast to a stop at the subgoal.
-            speed = min(self.p.push_speed, distance / (self.dt + self.coast))
+            speed = min(push_speed, distance / (self.dt + self.coast))
             velocity = speed * direction + 0.5 * (puck - direction * self.contact - pusher) / self.dt
         else:
             velocity = self._walk(puck, pusher, direction)
         return self._to_action(velocity)
+
+    def back_off(self, puck: np.ndarray, pusher: np.ndarray) -> np.ndarray:
+        """(2,) action of a pause: straight away from the puck at ``pause_speed``, so it never
+        touches it."""
+        away = pusher - puck
+        return self._to_action(self.p.pause_speed * away / max(float(np.linalg.norm(away)), 1e-9))
 
     def _walk(self, puck: np.ndarray, pusher: np.ndarray, direction: np.ndarray) -> np.ndarray:
         target = puck - direction * (self.contact + self.p.contact_gap)
@@ -175,13 +203,14 @@ def run_demo(
 
     Rejected: no admissible subgoals, a push longer than ``max_push_frames`` saved frames (the run
     stops there), one shorter than ``min_push_frames``, or a final puck farther than the scene's
-    ``goal_tolerance`` from the goal.
+    ``goal_tolerance`` from the goal. The timing (:func:`draw_timing`) is drawn after the subgoals.
     """
     scene = env.task.scene
     side = int(rng.choice([-1, 1]))
     subgoals = draw_subgoals(layout, side, rng, params, scene.puck_radius, scene.arena_half)
     if subgoals is None:
         return None
+    speeds, pauses = draw_timing(rng, params)
     env.task.pin_layout(layout)
     env.reset()
     physics = env.physics
@@ -198,17 +227,22 @@ def run_demo(
         pushers.append(physics.pusher_position())
 
     skip, budget = params.frame_skip, params.max_push_frames * params.frame_skip
-    last_saved = 0
+    push_start = 0  # the saved frame the current push started from: the previous one's end or pause
     while len(completions) < len(subgoals):
-        record(controller.act(pucks[-1], pushers[-1], subgoals[len(completions)]))
+        push = len(completions)
+        record(controller.act(pucks[-1], pushers[-1], subgoals[push], speeds[push]))
         frame = len(actions)
-        if np.linalg.norm(pucks[-1] - subgoals[len(completions)]) < params.reach_tolerance:
+        if np.linalg.norm(pucks[-1] - subgoals[push]) < params.reach_tolerance:
             completions.append(frame)
             saved = -(-frame // skip)
-            if not params.min_push_frames <= saved - last_saved <= params.max_push_frames:
+            if not params.min_push_frames <= saved - push_start <= params.max_push_frames:
                 return None
-            last_saved = saved
-        elif frame - last_saved * skip > budget:
+            push_start = saved + pauses[push]
+            # A pause fills the rest of the completion's saved frame and p more; without one the
+            # next push starts at once, mid-frame.
+            while pauses[push] and len(actions) < push_start * skip:
+                record(controller.back_off(pucks[-1], pushers[-1]))
+        elif frame - push_start * skip > budget:
             return None
     while len(actions) % skip:  # finish the last saved frame with the pusher at rest
         record(np.zeros(2))
@@ -216,6 +250,6 @@ def run_demo(
         return None
     return Demo(
         states=np.stack(states), puck=np.stack(pucks), pusher=np.stack(pushers),
-        actions=np.stack(actions), completions=np.asarray(completions), subgoals=subgoals,
+        actions=np.stack(actions), completions=np.asarray(completions), pauses=pauses, subgoals=subgoals,
         side=side, layout=layout,
     )

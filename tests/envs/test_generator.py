@@ -1,5 +1,6 @@
-"""PushingGenerator: clip layout, determinism, spawn workers, planning tasks."""
+"""PushingGenerator: clip layout, determinism, today's clips pinned, spawn workers, planning tasks."""
 
+import hashlib
 import multiprocessing
 from dataclasses import asdict
 
@@ -62,6 +63,31 @@ def test_deterministic_per_seed_and_index(clips):
     for name, value in clips[1][0].items():
         assert np.array_equal(value, again[name]), name
     assert not np.array_equal(GENERATOR.generate(1, seed=8)[0]["puck"], again["puck"])
+
+
+# The first two clips of seed 7 as the default generator made them before the timing options
+# existed (2026-12-01): every array's bytes, and each push's completion frame.
+PINNED_CLIPS = {
+    0: ("24f9cdc1e80b15014eb5081f8ad418164c246441cb73dd03013ae932e0e9a99f", [4, 8, 12, 17, 23, 29]),
+    1: ("994ddf3e0f3c88cd75d1596750791989db3fec15a63758e12465901c1914d49c", [4, 9, 15, 19, 23, 27]),
+}
+
+
+def clip_digest(arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 of a clip's arrays, names and bytes in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        digest.update(name.encode())
+        digest.update(np.ascontiguousarray(arrays[name]).tobytes())
+    return digest.hexdigest()
+
+
+@pytest.mark.parametrize("index", sorted(PINNED_CLIPS))
+def test_default_generator_makes_todays_clips(clips, index):
+    arrays, _ = clips[index]
+    digest, completions = PINNED_CLIPS[index]
+    assert arrays["completions"].tolist() == completions
+    assert clip_digest(arrays) == digest
 
 
 def _generate(args):
@@ -128,14 +154,41 @@ def test_keyin_generate_writes_the_same_tasks_as_the_planning_split(tmp_path):
         np.testing.assert_array_equal(written[name], value, err_msg=name)
 
 
+# The timing options came after dataset=pushing was generated: pushing.yaml leaves them unwritten,
+# at the generator's defaults (its regular timing), so that the folders generated before still
+# match its config (keyin-generate refuses a folder generated with another one).
+TIMING_OPTIONS = {"push_speed_spread", "max_pause_frames", "pause_speed"}
+
+
 def test_config_mirrors_the_generator():
     from hydra.utils import instantiate
     from omegaconf import OmegaConf
 
     config = OmegaConf.load(CONFIGS / "dataset" / "pushing.yaml")
     assert config.n_cond == PushingGenerator.n_cond == 1 and config.n_keyframes == 6
-    assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR))
+    assert set(config.generator) - {"_target_"} == set(asdict(GENERATOR)) - TIMING_OPTIONS
     assert instantiate(config.generator) == GENERATOR
+
+
+def test_irregular_clips_label_each_push_completion_before_its_pause():
+    from hydra import compose, initialize_config_module
+    from hydra.utils import instantiate
+
+    from keyin.cli.app import CONFIG_MODULE
+
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        generator = instantiate(compose("generate", overrides=["dataset=pushing_irregular"]).dataset.generator)
+    length = generator.clip_length
+    for index in range(3):
+        arrays, _ = generator.generate(index, seed=7)
+        demo, _ = generator.demo(index, seed=7)
+        completions = arrays["completions"]
+        assert np.array_equal(completions, demo.saved_completions(generator.frame_skip))
+        assert np.array_equal(np.flatnonzero(arrays["keyframes"]), completions[completions < length])
+        for frame, subgoal, pause in zip(completions, arrays["subgoals"], demo.pauses):
+            if frame + pause < length:  # the keyframe and the paused frames after it show the puck at the subgoal
+                puck = arrays["puck"][frame:frame + pause + 1]
+                assert np.linalg.norm(puck - subgoal, axis=1).max() < 0.08
 
 
 def test_demos_from_one_layout_start_there_and_go_round_either_end():
