@@ -3,6 +3,8 @@ one up to half precision, refuses a changed file; every shipped model is the fil
 
 import json
 
+import numpy as np
+
 import pytest
 import torch
 
@@ -81,3 +83,15 @@ def test_every_shipped_model_is_the_file_its_card_names(name):
     card = pretrained.registry()[name]
     assert checkpoint["keyin_config"]["model"]["name"] == card["model"]
     assert checkpoint["keyin_config"]["dataset"]["name"] == card["dataset"]
+
+
+def test_the_bundled_example_video_is_the_generators_clip_and_its_labels_its_turns():
+    from keyin.data.brownian import BrownianGenerator
+    from keyin.data.sources import decoded_frames
+    from keyin.pretrained.__main__ import EXAMPLE, EXAMPLE_LABELS
+
+    arrays, _ = BrownianGenerator(n_cond=1, n_future=199).generate(0, seed=777)
+    decoded = np.stack(list(decoded_frames(pretrained.FOLDER / EXAMPLE)))
+    assert (decoded.max(axis=-1) == arrays["frames"][..., 0]).all()
+    labels = json.loads((pretrained.FOLDER / EXAMPLE_LABELS).read_text())
+    assert labels == {EXAMPLE: arrays["keyframes"].nonzero()[0].tolist()}
