@@ -181,6 +181,17 @@ def config_choice(group: str) -> str | None:
     return HydraConfig.get().runtime.choices.get(group)
 
 
+def finished_metrics(folder: Path) -> dict[str, Any] | None:
+    """A finished job's ``metrics.json`` (printed as its last line, as the job did), or None if it has none."""
+    finished = Path(folder) / "metrics.json"
+    if not finished.is_file():
+        return None
+    metrics = json.loads(finished.read_text())
+    print(f"{folder} finished earlier; skipped (delete its metrics.json to run it again)")
+    print(json.dumps(metrics, sort_keys=True))
+    return metrics
+
+
 def write_metrics(metrics: Mapping[str, Any], folder: Path) -> Path:
     """Write ``metrics.json`` atomically, with the keyin version that wrote it, and print the metrics
     as the last line of output."""

@@ -11,7 +11,7 @@ from hydra.utils import instantiate
 from torch.utils.data import Dataset, Subset
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
+from keyin.cli.app import finished_metrics, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_int_at_least, require_positive_int
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import read_manifest, split_files
@@ -87,6 +87,9 @@ def check_video_samples(cfg: DictConfig, stage: str | None) -> None:
 @user_errors
 def evaluate(cfg: DictConfig) -> dict:
     check_common(cfg)
+    finished = finished_metrics(run_dir()) if cfg.skip_finished else None
+    if finished is not None:
+        return finished
     require_positive_int(cfg.batch_size, "batch_size")
     tolerances = check_tolerances(cfg)
     if cfg.ckpt is not None:

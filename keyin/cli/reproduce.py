@@ -1,7 +1,7 @@
 """keyin-reproduce table=<name>: data, every job, their small files and the report of one committed table.
 
 The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
-(each a ``keyin-train -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
+(each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
 folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``),
 its composed ``config.yaml`` and the SHA-256 of every checkpoint it wrote or read (``checkpoints.json``)
 are copied to ``<out>/jobs/<job>/``, so the report, built from those files by ``keyin-report``, can be
@@ -24,7 +24,7 @@ from keyin.errors import ConfigError, KeyinError
 from keyin.io import atomic_write_text, sha256_of
 
 STEPS = ("data", "jobs", "collect", "report")
-PROGRAMS = {"train": "keyin.cli.train", "plan": "keyin.cli.plan"}
+PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan"}
 SMALL_FILES = ("metrics.json", "predictions.json", "tasks.jsonl")  # copied as they are; the config comes from .hydra/
 
 

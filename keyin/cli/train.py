@@ -5,7 +5,6 @@ Untrained baselines (Random, Constant) are only scored, so one sweep covers ever
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Callable
@@ -16,7 +15,7 @@ from lightning.pytorch.loggers import Logger
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import config_choice, keyin_main, run_dir, user_errors, write_metrics
+from keyin.cli.app import config_choice, finished_metrics, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training
 from keyin.cli.tracking import job_logger
 from keyin.data.datamodule import ClipDataModule, split_clips
@@ -64,12 +63,9 @@ def train(cfg: DictConfig) -> dict | None:
     check_common(cfg)
     check_training(cfg)
     folder = run_dir()
-    finished = folder / "metrics.json"
-    if cfg.skip_finished and finished.is_file():
-        metrics = json.loads(finished.read_text())
-        print(f"{folder} finished earlier; skipped (delete its metrics.json to run it again)")
-        print(json.dumps(metrics, sort_keys=True))
-        return metrics
+    finished = finished_metrics(folder) if cfg.skip_finished else None
+    if finished is not None:
+        return finished
     L.seed_everything(cfg.seed, workers=True)
     with job_logger(cfg.logger) as logger:
         return fit_and_score(cfg, folder, logger)

@@ -49,3 +49,11 @@ def test_console_scripts_are_installed_next_to_the_interpreter(tmp_path):
     result = run_process("plan", "success_threshold=0", cwd=tmp_path, timeout=60)
     assert result.returncode == 2 and "error: success_threshold=0 must be a positive number" in result.stderr
 
+
+
+def test_eval_skips_a_finished_run_dir_when_asked(brownian_test_set):
+    first = run("eval", "model=random", "progress=false", "hydra.run.dir=runs/skip", cwd=brownian_test_set)
+    again = run("eval", "model=random", "progress=false", "hydra.run.dir=runs/skip", "skip_finished=true", "seed=5",
+                cwd=brownian_test_set)
+    assert first.returncode == again.returncode == 0, again.stderr
+    assert "finished earlier; skipped" in again.stdout and last_json(again.stdout) == last_json(first.stdout)

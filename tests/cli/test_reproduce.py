@@ -46,7 +46,7 @@ def test_an_unknown_step_or_program_and_a_missing_sweep_folder_name_the_fix(tmp_
     bad = run("reproduce", "table=brownian_table1", "steps=[data,train]", cwd=tmp_path)
     assert bad.returncode == 2 and "['train'] are not steps; use any of ['data', 'jobs', 'collect', 'report']" in bad.stderr
     program = run("reproduce", "table=brownian_table1", "table.sweeps.0.program=fit", cwd=tmp_path)
-    assert program.returncode == 2 and "table.sweeps[0].program='fit' must be one of ['plan', 'train']" in program.stderr
+    assert program.returncode == 2 and "table.sweeps[0].program='fit' must be one of ['eval', 'plan', 'train']" in program.stderr
     missing = run("reproduce", "table=brownian_table1", "steps=[collect]", cwd=tmp_path)
     assert missing.returncode == 2 and "does not exist: run the jobs first (steps=[jobs])" in missing.stderr
 
