@@ -56,7 +56,7 @@ def check_discovery(cfg: DictConfig, stage: str | None) -> list[str] | None:
     return [cfg.discovery] if isinstance(cfg.discovery, str) else list(cfg.discovery)
 
 
-def first_clips(clips: ShardClips, count: int | None) -> Dataset:
+def clip_subset(clips: ShardClips, count: int | None) -> Dataset:
     """The first ``count`` clips (all for None)."""
     if count is None:
         return clips
@@ -117,7 +117,7 @@ def evaluate(cfg: DictConfig) -> dict:
         check_video_samples(cfg, None)
         check_discovery(cfg, None)
         discoverers, dataset = {cfg.model.name: instantiate(cfg.model.discoverer)}, cfg.dataset
-    clips = first_clips(eval_clips(cfg, dataset), cfg.clips)
+    clips = clip_subset(eval_clips(cfg, dataset), cfg.clips)
     loader = dict(batch_size=cfg.batch_size, num_workers=cfg.num_workers, progress=cfg.progress)
     metrics = score_methods(
         discoverers, clips, dataset.n_cond, dataset.n_future, run_dir(), tolerances, clip_videos(cfg, dataset, len(clips)),
