@@ -106,12 +106,15 @@ def check_figures(cfg: DictConfig) -> None:
         require_int_at_least(cfg[key], key, 0)
 
 
+PUSHING_GENERATOR = "keyin.data.pushing.PushingGenerator"  # dataset=pushing and pushing_irregular
+
+
 @user_errors
 def figures(cfg: DictConfig) -> dict[str, Any]:
     check_figures(cfg)
     model, trained = stage2_model(cfg, "ckpt")
     dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
-    if cfg.figure in PUSHING_ONLY and dataset.name != "pushing":
+    if cfg.figure in PUSHING_ONLY and OmegaConf.select(dataset, "generator._target_") != PUSHING_GENERATOR:
         raise ConfigError(
             f"figure={cfg.figure} draws the pushing scene, but ckpt= holds a model of dataset={dataset.name}; "
             f"pass a pushing checkpoint"
