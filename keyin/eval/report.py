@@ -31,6 +31,7 @@ PAPER_ROWS = ("random", "constant", "static", "jumpy", "surprise", "keyin_paper"
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "precision", "recall", "n_predicted", "hausdorff",
+    "train_seconds", "score_seconds",
 )  # the information rule's columns (docs/evaluation.md) first; a keyin 0.1 job has only the rest
 
 
@@ -170,14 +171,21 @@ def _spread(mean: float, std: float) -> str:
     return "–" if math.isnan(mean) else f"{mean:.3f} ± {std:.3f}"
 
 
+def _minutes(mean: dict[str, float]) -> str:
+    """A job's mean training and scoring wall time in minutes (–: a variant, scored in its method's job)."""
+    train, score = mean["train_seconds"], mean["score_seconds"]
+    return "–" if math.isnan(train) or math.isnan(score) else f"{train / 60:.1f} + {score / 60:.1f}"
+
+
 def markdown_table(rows: list[TableRow]) -> str:
     """Table 1 as Markdown: F1 mean ± std over seeds in the information rule's two columns
     (interior, with ends; docs/evaluation.md) and as the method gives its keyframes, the paper's F1,
-    and companions; the paper's methods first, our additions after them (``row``: paper or ours) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
+    and companions, each job's wall time in its process (mean over seeds; a stage 1 shared by several
+    jobs counts in the one that trained it, a resumed job its last part only); the paper's methods first, our additions after them (``row``: paper or ours) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
     lines = [
         "| dataset | method | row | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
-        "| precision | recall | keyframes/clip | Hausdorff | seeds |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| precision | recall | keyframes/clip | Hausdorff | train + score (min) | seeds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         m, s = row.mean, row.std
@@ -186,7 +194,7 @@ def markdown_table(rows: list[TableRow]) -> str:
             f"{_spread(m['f1_with_ends'], s['f1_with_ends'])} | {_spread(m['f1'], s['f1'])} | {_paper(row.paper_f1)} | "
             f"{'–' if math.isnan(m['f1_tol1_interior']) else format(m['f1_tol1_interior'], '.3f')} | "
             f"{m['f1_tol1']:.3f} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
-            f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {len(row.seeds)} |"
+            f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {_minutes(m)} | {len(row.seeds)} |"
         )
     return "\n".join(lines) + "\n"
 

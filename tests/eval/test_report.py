@@ -109,3 +109,11 @@ def test_the_papers_methods_come_first_and_our_additions_are_marked():
     ordered = sorted(methods, key=method_sort_key)
     assert ordered == ["random", "surprise", "keyin_paper", "surprise_shift0", "keyin_plus", "keyin_plus_offsets", "changepoint"]
     assert [row_source(m) for m in ordered] == ["paper"] * 3 + ["ours"] * 4
+
+
+def test_each_row_says_its_jobs_mean_wall_time_and_a_variant_none(tmp_path):
+    for seed, minutes in enumerate([10, 20]):
+        write_job(tmp_path, f"surprise_seed{seed}", "surprise", seed, 0.4, train_seconds=60 * minutes, score_seconds=90,
+                  variants={"surprise_shift0": dict(f1=0.1, f1_tol1=0.3, precision=0.1, recall=0.1, n_predicted=6.0)})
+    rows = markdown_table(summarise(collect_metrics(tmp_path))).splitlines()
+    assert rows[2].endswith("| 15.0 + 1.5 | 2 |") and rows[3].endswith("| – | 2 |")
