@@ -135,11 +135,19 @@ def score_batch(model: KEYIN, clips: Tensor, future_length: Tensor, k: int) -> d
         clips: (B, L, C, H, W) in [0, 1].
         future_length: (B,).
     Returns:
-        ``psnr``/``ssim`` (k, B) of the samples and ``psnr_posterior``/``ssim_posterior`` (B,).
+        ``psnr``/``ssim`` (k, B) of the samples, ``psnr_posterior``/``ssim_posterior`` (B,), and
+        ``psnr_blank``/``ssim_blank`` (B,): all-black frames, the reference a prediction must beat
+        where the background is black (on Brownian a blurred or empty frame scores about as well).
     """
     posterior = predict_futures(model, clips, future_length, 1, "posterior", sample=False)
     samples = predict_futures(model, clips, future_length, k)
-    return {**samples.scores, **{f"{name}_posterior": posterior.scores[name][0] for name in METRICS}}
+    future = clips[:, model.n_cond :].to(device_of(model))
+    blank = clip_scores(torch.zeros_like(future), future, future_length.to(future.device))
+    return {
+        **samples.scores,
+        **{f"{name}_posterior": posterior.scores[name][0] for name in METRICS},
+        **{f"{name}_blank": blank[name] for name in METRICS},
+    }
 
 
 def sample_summary(scores: dict[str, Tensor]) -> dict[str, float]:
@@ -158,11 +166,12 @@ def summarize(scores: dict[str, Tensor]) -> dict[str, float | int]:
 
     Returns:
         ``<metric>_best_of_k`` (per clip the max over samples), ``<metric>_mean``,
-        ``<metric>_posterior`` for PSNR and SSIM, and ``k``.
+        ``<metric>_posterior``, ``<metric>_blank`` for PSNR and SSIM, and ``k``.
     """
     summary: dict[str, float | int] = sample_summary(scores)
     for name in METRICS:
-        summary[f"{name}_posterior"] = float(scores[f"{name}_posterior"].nanmean())
+        for kind in ("posterior", "blank"):
+            summary[f"{name}_{kind}"] = float(scores[f"{name}_{kind}"].nanmean())
     summary["k"] = scores["psnr"].shape[0]
     return summary
 

@@ -139,7 +139,8 @@ def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
     assert 0 < metrics["n_predicted"] <= 5  # at most M = 6 gaps, the last one closing the clip
 
 
-VIDEO_KEYS = {"psnr_best_of_k", "ssim_best_of_k", "psnr_mean", "ssim_mean", "psnr_posterior", "ssim_posterior", "k"}
+VIDEO_KEYS = {"psnr_best_of_k", "ssim_best_of_k", "psnr_mean", "ssim_mean", "psnr_posterior", "ssim_posterior",
+              "psnr_blank", "ssim_blank", "k"}
 
 
 def test_eval_with_video_samples_adds_video_metrics_and_rollouts(trained):

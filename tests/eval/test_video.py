@@ -51,13 +51,15 @@ def test_best_of_k_takes_each_clips_best_sample():
     offsets = torch.tensor([[0.1, 0.01], [0.01, 0.1], [0.2, 0.001]])  # (k, B): clip 0 best at 1, clip 1 at 2
     samples = [clip_scores(target + d.view(2, 1, 1, 1, 1), target, LENGTHS) for d in offsets]
     scores = {name: torch.stack([sample[name] for sample in samples]) for name in ("psnr", "ssim")}
-    scores.update(psnr_posterior=torch.tensor([7.0, 9.0]), ssim_posterior=torch.tensor([0.5, 0.7]))
+    scores.update(psnr_posterior=torch.tensor([7.0, 9.0]), ssim_posterior=torch.tensor([0.5, 0.7]),
+                  psnr_blank=torch.tensor([18.0, 20.0]), ssim_blank=torch.tensor([0.8, 0.9]))
     summary = summarize(scores)
     psnr = -10 * torch.log10(offsets**2)
     assert math.isclose(summary["psnr_best_of_k"], (40.0 + 60.0) / 2, abs_tol=1e-3)  # no one sample is best for both
     assert math.isclose(summary["psnr_mean"], float(psnr.mean()), abs_tol=1e-3)
     assert summary["ssim_best_of_k"] == float(scores["ssim"].max(0).values.mean())
     assert summary["psnr_posterior"] == 8.0 and math.isclose(summary["ssim_posterior"], 0.6, rel_tol=1e-6)
+    assert summary["psnr_blank"] == 19.0 and math.isclose(summary["ssim_blank"], 0.85, rel_tol=1e-6)
     assert summary["k"] == 3
 
 
@@ -66,7 +68,7 @@ def test_a_clip_without_valid_frames_is_left_out_of_the_means():
     scores = clip_scores(target + 0.1, target, torch.tensor([4, 0]))
     assert bool(scores["psnr"][1].isnan())
     summary = summarize({**{name: values[None] for name, values in scores.items()},
-                         **{f"{name}_posterior": values for name, values in scores.items()}})
+                         **{f"{name}_{kind}": values for name, values in scores.items() for kind in ("posterior", "blank")}})
     assert math.isclose(summary["psnr_best_of_k"], 20.0, abs_tol=1e-3)
     assert math.isclose(summary["psnr_mean"], 20.0, abs_tol=1e-3)
 
@@ -94,8 +96,17 @@ def test_rgb_scores_are_seeded_and_ignore_the_padding():
         assert runs[0][name].shape == (2, 2) and runs[0][f"{name}_posterior"].shape == (2,)
         assert bool(runs[0][name].isfinite().all())
         assert not torch.equal(runs[0][name][0], runs[0][name][1])  # two different samples
-        for key in (name, f"{name}_posterior"):  # the same seed, the same samples; padding unseen
+        for key in (name, f"{name}_posterior", f"{name}_blank"):  # the same seed, the same samples; padding unseen
             torch.testing.assert_close(runs[0][key], runs[1][key])
+
+
+def test_the_blank_reference_scores_black_frames_against_the_truth():
+    """A frame with a fraction p of its pixels at 1 is -10 log10(p) dB from black."""
+    clips = torch.zeros(1, 8, 1, 8, 8)  # the model's clips: n_cond 2, N 6, 8x8 grey
+    clips[0, 2:, 0, :4, :] = 1.0  # every future frame has half its pixels lit
+    model = keyframe_module(0.0).eval().model
+    blank = score_batch(model, clips, torch.tensor([6]), k=1)["psnr_blank"]
+    torch.testing.assert_close(blank, torch.tensor([10 * math.log10(2.0)]))
 
 
 def test_rollouts_show_truth_reconstruction_and_best_sample_per_clip(tmp_path):
