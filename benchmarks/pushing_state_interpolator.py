@@ -25,8 +25,8 @@ from keyin.data.hdf5 import load_arrays
 from keyin.data.segments import partition_segments
 from keyin.decode.segment_costs import embedding_costs
 from keyin.decode.segmentation import KNEE, decode_by_length
-from keyin.eval.f1 import column_scores, keyframe_lists
 from keyin.models.interpolator import Interpolator, interpolate_segments
+from pushing_state_segmentation import score
 
 N_KEYFRAMES, N_COND = 6, 1
 PRICES: list[float | str] = [0.0, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, KNEE]
@@ -79,12 +79,6 @@ def discover(model: Interpolator, states: torch.Tensor, lengths: torch.Tensor, p
         return embedding_costs(model, boundary[rows, : length + 1])
 
     return decode_by_length(segment_costs, future_lengths, N_KEYFRAMES, model.max_offset, price)
-
-
-def score(arrays: dict[str, np.ndarray], predicted: list[list[int]]) -> dict[str, float]:
-    keyframes = torch.from_numpy(arrays["keyframes"][:, N_COND:])
-    lengths = (arrays["length"] - N_COND).tolist()
-    return column_scores(predicted, keyframe_lists(keyframes), lengths, keyframes.shape[1])
 
 
 def main() -> None:
