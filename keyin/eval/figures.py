@@ -57,7 +57,7 @@ def save_comparison(
         shown.append({"clip": clip, "true_keyframes": true})
         for name, (videos, keyframes, scores) in best.items():
             rows.append(marked_frames(videos[clip], n_cond, true, keyframes[clip]))
-            labels.append(f"{name} ({how})\nPSNR {float(scores['psnr'][clip]):.1f}")
+            labels.append(f"{name}\n({how})\nPSNR {float(scores['psnr'][clip]):.1f}")
             shown[-1][name] = {"keyframes": keyframes[clip], **{m: float(scores[m][clip]) for m in METRICS}}
     save_labeled_strips(rows, labels, path)
     n_future = frames.shape[1] - n_cond
