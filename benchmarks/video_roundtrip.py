@@ -90,7 +90,7 @@ def main() -> None:
         order = [int(origin.video.removeprefix("clip").removesuffix(".mp4")) for origin in clip_origins(folder, "test")]
         imported = discover(discoverer, imported_clips)
         decoded = np.concatenate([load_arrays(path, ("frames",))["frames"] for path in files])
-    by_clip = {clip: row for clip, row in zip(order, range(len(order)))}
+    by_clip = {clip: row for row, clip in enumerate(order)}
     rows = [by_clip[clip] for clip in range(count)]
     error = np.mean([
         np.abs(decoded[row, : int(arrays["length"][clip])].astype(float) - arrays["frames"][clip, : int(arrays["length"][clip])]).mean()
