@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 from keyin.data.hdf5 import load_arrays
-from keyin.data.segments import partition_segments
+from keyin.data.segments import partition_segments, segment_frames
 from keyin.decode.segment_costs import embedding_costs
 from keyin.decode.segmentation import KNEE, decode_by_length
 from keyin.models.interpolator import Interpolator, interpolate_segments
@@ -58,9 +58,8 @@ def train(states: torch.Tensor, lengths: torch.Tensor, steps: int, batch: int, s
         clips, clip_lengths = states[rows], lengths[rows]
         segments = partition_segments(clip_lengths, 1, max_offset, rng)
         predicted, valid, _ = interpolate_segments(model, None, clips, *segments, "mean")
-        clip, start, _ = segments
-        index = (start[:, None] + 1 + torch.arange(max_offset)).clamp(max=clips.shape[1] - 1)
-        targets = clips[clip[:, None], index]  # (R, S, D)
+        clip, start, offset = segments
+        targets = clips[clip[:, None], segment_frames(start, offset, max_offset)[0]]  # (R, S, D)
         loss = (((predicted - targets) ** 2).sum(-1) * valid).sum() / valid.sum()
         optimizer.zero_grad()
         loss.backward()

@@ -21,6 +21,7 @@ import torch
 
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
+from keyin.data.segments import segment_frames, valid_frames
 from keyin.envs.pushing import COLOURS
 from keyin.envs.segmentation import puck_centroid
 from keyin.lit.checkpoints import load_checkpoint, load_trained_module
@@ -77,13 +78,13 @@ def main() -> None:
     lengths = hp.n_cond + torch.stack([item["future_length"] for item in batch])
     keyframes = torch.stack([item["keyframes"] for item in batch])  # (B, N)
     embeddings = module.encoder(frames)  # (B, L, E)
-    valid = torch.arange(frames.shape[1])[None] < lengths[:, None]
+    valid = valid_frames(lengths, frames.shape[1])
     auto = torch.sigmoid(module.decoder(embeddings[valid])).permute(0, 2, 3, 1).numpy()
     truth = frames[valid].permute(0, 2, 3, 1).numpy()
     segments = labelled_segments(keyframes, lengths, hp.n_cond, hp.max_offset)
     predicted, inside, _ = interpolate_segments(module.interpolator, None, embeddings, *segments, "mean")
-    clip, start, _ = segments
-    positions = start[:, None] + 1 + torch.arange(hp.max_offset)
+    clip, start, offset = segments
+    positions, _ = segment_frames(start, offset, hp.max_offset)
     inter = torch.sigmoid(module.decoder(predicted[inside])).permute(0, 2, 3, 1).numpy()
     inter_truth = frames[clip[:, None].expand_as(positions)[inside], positions[inside]].permute(0, 2, 3, 1).numpy()
     print(f"## Where stage 1 draws the objects: {args.ckpt} (step {step})\n")
