@@ -1,10 +1,11 @@
 """Test clips through a video file and back: do a trained model's keyframes survive the codec?
 
-    python benchmarks/video_roundtrip.py pretrained:brownian --data data/brownian/test-00000.h5 --clips 200
+    python benchmarks/video_roundtrip.py pretrained:brownian --data data/brownian/test-00000.h5 --clips 200 [--codec ffv1]
 
-Each of the first ``--clips`` clips of a keyin HDF5 shard (its valid frames only) is written as an
-mp4 by a video library (imageio's PyAV plugin, H.264 at its default quality, 10 frames per second),
-with its labelled keyframes as a labels file; ``keyin-import`` reads them back as a user's videos
+Each of the first ``--clips`` clips of a keyin HDF5 shard (its valid frames only) is written as a
+video by a video library (imageio's PyAV plugin, 10 frames per second; ``--codec h264``: an mp4 at
+H.264's default quality, lossy as a camera's; ``--codec ffv1``: a lossless FFV1 mkv, which isolates
+the import pipeline from the codec), with its labelled keyframes as a labels file; ``keyin-import`` reads them back as a user's videos
 are read (one clip per video, padded like the original), and the checkpoint's discovery rule finds
 keyframes on both the original and the re-imported clips. Prints Markdown: the frames' error after
 the codec, F1 on both (interior column), how many clips get the same keyframes, and the mean
@@ -34,18 +35,23 @@ from keyin.eval.f1 import hausdorff
 from keyin.lit.checkpoints import load_trained_module
 
 FPS = 10
+CODECS = {  # name -> (FFmpeg encoder, its pixel format or None for the default, file suffix, description)
+    "h264": ("libx264", None, ".mp4", "H.264 mp4 (default quality)"),
+    "ffv1": ("ffv1", "bgr0", ".mkv", "FFV1 mkv (lossless)"),
+}
 
 
-def write_videos(arrays: dict[str, np.ndarray], count: int, folder: Path) -> dict[str, list[int]]:
-    """``clip0000.mp4`` … with each clip's valid frames; returns the labels (clip-axis frame indices)."""
+def write_videos(arrays: dict[str, np.ndarray], count: int, folder: Path, codec: str) -> dict[str, list[int]]:
+    """``clip0000<suffix>`` … with each clip's valid frames; returns the labels (clip-axis frame indices)."""
+    encoder, pixel_format, suffix, _ = CODECS[codec]
     folder.mkdir(parents=True, exist_ok=True)
     labels = {}
     for index in range(count):
         frames = arrays["frames"][index, : int(arrays["length"][index])]  # (T, H, W, C) uint8
         if frames.shape[-1] == 1:
             frames = np.repeat(frames, 3, axis=-1)
-        name = f"clip{index:04d}.mp4"
-        iio.imwrite(folder / name, frames, plugin="pyav", codec="libx264", fps=FPS)
+        name = f"clip{index:04d}{suffix}"
+        iio.imwrite(folder / name, frames, plugin="pyav", codec=encoder, fps=FPS, out_pixel_format=pixel_format)
         labels[name] = np.flatnonzero(arrays["keyframes"][index]).tolist()
     return labels
 
@@ -69,6 +75,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True, help="a keyin HDF5 shard (e.g. data/pushing/test-00000.h5)")
     parser.add_argument("--clips", type=int, default=200)
     parser.add_argument("--rule", default=None, help="the discovery rule (default: the checkpoint's own)")
+    parser.add_argument("--codec", choices=sorted(CODECS), default="h264", help="the video codec the clips go through")
     args = parser.parse_args()
     began = time.perf_counter()
     module, config = load_trained_module(args.ckpt)
@@ -82,12 +89,12 @@ def main() -> None:
     original = discover(discoverer, Subset(ShardClips([args.data], shape, dataset["n_cond"], dataset["n_future"]), range(count)))
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        labels = write_videos(arrays, count, work / "videos")
+        labels = write_videos(arrays, count, work / "videos", args.codec)
         (work / "labels.json").write_text(json.dumps(labels))
         folder = import_videos(work / "videos", work / "labels.json", work / "data", dataset)
         files = split_files(folder, "test")
         imported_clips = ShardClips(files, shape, dataset["n_cond"], dataset["n_future"])
-        order = [int(origin.video.removeprefix("clip").removesuffix(".mp4")) for origin in clip_origins(folder, "test")]
+        order = [int(Path(origin.video).stem.removeprefix("clip")) for origin in clip_origins(folder, "test")]
         imported = discover(discoverer, imported_clips)
         decoded = np.concatenate([load_arrays(path, ("frames",))["frames"] for path in files])
     by_clip = {clip: row for row, clip in enumerate(order)}
@@ -103,9 +110,10 @@ def main() -> None:
     same = sum(a == b for a, b in zip(original.predicted, imported.predicted))
     differing = [hausdorff(a, b, n_future) for a, b in zip(original.predicted, imported.predicted) if a != b]
     scores = {name: found.scores(n_future) for name, found in (("original", original), ("imported", imported))}
-    print(f"## Keyframes through an mp4 and back ({args.data})\n")
-    print(f"- command: `python benchmarks/video_roundtrip.py {args.ckpt} --data {args.data} --clips {args.clips}`; rule `{rule}`")
-    print(f"- {count} clips as H.264 mp4 (imageio + PyAV, default quality, {FPS} fps), re-imported by keyin-import")
+    description = CODECS[args.codec][3]
+    print(f"## Keyframes through a video file and back ({args.data}, {description})\n")
+    print(f"- command: `python benchmarks/video_roundtrip.py {args.ckpt} --data {args.data} --clips {args.clips} --codec {args.codec}`; rule `{rule}`")
+    print(f"- {count} clips as {description} (imageio + PyAV, {FPS} fps), re-imported by keyin-import")
     print(f"- the frames after the codec: mean absolute error {error:.2f} of 255\n")
     print("| clips | F1 interior | ±1 F1 interior | F1 as given | keyframes/clip |")
     print("|---|---|---|---|---|")
