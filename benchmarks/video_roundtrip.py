@@ -5,11 +5,11 @@
 Each of the first ``--clips`` clips of a keyin HDF5 shard (its valid frames only) is written as a
 video by a video library (imageio's PyAV plugin, 10 frames per second; ``--codec h264``: an mp4 at
 H.264's default quality, lossy as a camera's; ``--codec ffv1``: a lossless FFV1 mkv, which isolates
-the import pipeline from the codec), with its labelled keyframes as a labels file; ``keyin-import`` reads them back as a user's videos
-are read (one clip per video, padded like the original), and the checkpoint's discovery rule finds
-keyframes on both the original and the re-imported clips. Prints Markdown: the frames' error after
-the codec, F1 on both (interior column), how many clips get the same keyframes, and the mean
-distance between the two sets where they differ.
+the import pipeline from the codec), with its labelled keyframes as a labels file; ``keyin-import``
+reads them back as a user's videos are read (one clip per video, padded like the original), and the
+checkpoint's discovery rule finds keyframes on both the original and the re-imported clips. Prints
+Markdown: the frames' error after the codec, F1 on both (interior column), how many clips get the
+same keyframes, and the mean distance between the two sets where they differ.
 """
 
 from __future__ import annotations
