@@ -33,6 +33,7 @@ SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "precision", "recall", "n_predicted", "hausdorff",
     "train_seconds", "score_seconds",
 )  # the information rule's columns (docs/evaluation.md) first; a keyin 0.1 job has only the rest
+TIMES = ("train_seconds", "score_seconds")  # a job's wall times in its process, where it recorded them
 
 
 @dataclass
@@ -45,6 +46,7 @@ class TableRow:
     mean: dict[str, float]
     std: dict[str, float]
     paper_f1: float | None
+    timed_seeds: list[int]  # the seeds whose job recorded its wall times (the time columns average these)
 
 
 Roots = Path | Sequence[Path]
@@ -150,14 +152,18 @@ def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
     for (dataset, method), by_seed in sorted(groups.items(), key=lambda item: (item[0][0], method_sort_key(item[0][1]))):
         values = {score: np.array([float(r.get(score, math.nan)) for r in by_seed.values()]) for score in SCORES}
         ddof = 1 if len(by_seed) > 1 else 0
+        timed = [seed for seed, r in by_seed.items() if all(not math.isnan(float(r.get(s, math.nan))) for s in TIMES)]
+        mean = {score: float(v.mean()) for score, v in values.items()}
+        mean.update({score: float(np.mean([by_seed[seed][score] for seed in timed])) if timed else math.nan for score in TIMES})
         rows.append(
             TableRow(
                 dataset=dataset,
                 method=method,
                 seeds=sorted(by_seed),
-                mean={score: float(v.mean()) for score, v in values.items()},
+                mean=mean,
                 std={score: float(v.std(ddof=ddof)) for score, v in values.items()},
                 paper_f1=PAPER_TABLE1.get(dataset, {}).get(method),
+                timed_seeds=sorted(timed),
             )
         )
     return rows
@@ -171,10 +177,15 @@ def _spread(mean: float, std: float) -> str:
     return "–" if math.isnan(mean) else f"{mean:.3f} ± {std:.3f}"
 
 
-def _minutes(mean: dict[str, float]) -> str:
-    """A job's mean training and scoring wall time in minutes (–: a variant, scored in its method's job)."""
-    train, score = mean["train_seconds"], mean["score_seconds"]
-    return "–" if math.isnan(train) or math.isnan(score) else f"{train / 60:.1f} + {score / 60:.1f}"
+def _minutes(row: TableRow) -> str:
+    """A job's mean training and scoring wall time in minutes over the seeds that recorded it, naming
+    them where some did not (–: none did, or a variant, scored in its method's job)."""
+    if not row.timed_seeds:
+        return "–"
+    minutes = f"{row.mean['train_seconds'] / 60:.1f} + {row.mean['score_seconds'] / 60:.1f}"
+    if len(row.timed_seeds) < len(row.seeds):
+        minutes += f" (seed{'s' if len(row.timed_seeds) > 1 else ''} {', '.join(map(str, row.timed_seeds))})"
+    return minutes
 
 
 def markdown_table(rows: list[TableRow]) -> str:
@@ -194,7 +205,7 @@ def markdown_table(rows: list[TableRow]) -> str:
             f"{_spread(m['f1_with_ends'], s['f1_with_ends'])} | {_spread(m['f1'], s['f1'])} | {_paper(row.paper_f1)} | "
             f"{'–' if math.isnan(m['f1_tol1_interior']) else format(m['f1_tol1_interior'], '.3f')} | "
             f"{m['f1_tol1']:.3f} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
-            f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {_minutes(m)} | {len(row.seeds)} |"
+            f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {_minutes(row)} | {len(row.seeds)} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -117,3 +117,13 @@ def test_each_row_says_its_jobs_mean_wall_time_and_a_variant_none(tmp_path):
                   variants={"surprise_shift0": dict(f1=0.1, f1_tol1=0.3, precision=0.1, recall=0.1, n_predicted=6.0)})
     rows = markdown_table(summarise(collect_metrics(tmp_path))).splitlines()
     assert rows[2].endswith("| 15.0 + 1.5 | 2 |") and rows[3].endswith("| – | 2 |")
+
+
+def test_wall_times_average_the_seeds_that_recorded_them_and_name_those(tmp_path):
+    write_job(tmp_path, "keyin_paper_seed0", "keyin_paper", 0, 0.2)  # written before jobs timed themselves
+    for seed, minutes in [(1, 10), (2, 30)]:
+        write_job(tmp_path, f"keyin_paper_seed{seed}", "keyin_paper", seed, 0.2, train_seconds=60 * minutes, score_seconds=30)
+    write_job(tmp_path, "static_seed0", "static", 0, 0.3)
+    rows = markdown_table(summarise(collect_metrics(tmp_path))).splitlines()
+    assert rows[2].startswith("| brownian | static |") and rows[2].endswith("| – | 1 |")
+    assert rows[3].startswith("| brownian | keyin_paper |") and rows[3].endswith("| 20.0 + 0.5 (seeds 1, 2) | 3 |")
