@@ -70,6 +70,8 @@ def check_plan(cfg: DictConfig) -> float:
     if task_indices(cfg.tasks, "tasks") == frozenset():
         raise ConfigError(f"tasks={cfg.tasks!r} plays nothing; give n >= 1, a list of task indices or null (all)")
     task_indices(cfg.pictures, "pictures")
+    if not isinstance(cfg.outcome_pictures, bool):
+        raise ConfigError(f"outcome_pictures={cfg.outcome_pictures!r} must be true or false")
     threshold = cfg.success_threshold
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 0:
         raise ConfigError(f"success_threshold={threshold!r} must be a positive number (world units)")
@@ -102,6 +104,7 @@ def plan(cfg: DictConfig) -> dict:
         threshold=threshold,
         pictures=task_indices(cfg.pictures, "pictures"),
         picture_dir=folder / "pictures",
+        outcome_pictures=cfg.outcome_pictures,
     )
     records, counts = run_tasks(job, tasks, folder / "tasks.jsonl", cfg.workers, cfg.progress)
     if counts["skipped"]:

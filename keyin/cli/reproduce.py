@@ -2,10 +2,10 @@
 
 The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
 (each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
-folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``),
-its composed ``config.yaml`` and the SHA-256 of every checkpoint it wrote or read (``checkpoints.json``)
-are copied to ``<out>/jobs/<job>/``, so the report, built from those files by ``keyin-report``, can be
-rebuilt after the run folders are gone.
+folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``, a
+planner's one picture per outcome kind), its composed ``config.yaml`` and the SHA-256 of every checkpoint
+it wrote or read (``checkpoints.json``) are copied to ``<out>/jobs/<job>/``, so the report, built from
+those files by ``keyin-report``, can be rebuilt after the run folders are gone.
 """
 
 from __future__ import annotations
@@ -21,11 +21,12 @@ from omegaconf import DictConfig, OmegaConf
 from keyin.cli import report
 from keyin.cli.app import keyin_main, user_errors
 from keyin.errors import ConfigError, KeyinError
-from keyin.io import atomic_write_text, sha256_of
+from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 
 STEPS = ("data", "jobs", "collect", "report")
 PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan"}
 SMALL_FILES = ("metrics.json", "predictions.json", "tasks.jsonl")  # copied as they are; the config comes from .hydra/
+OUTCOME_PICTURES = "pictures/outcome_*.png"  # keyin-plan's first episode of each outcome kind
 
 
 def commands(cfg: DictConfig) -> list[list[str]]:
@@ -57,6 +58,9 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
         for name in SMALL_FILES:
             if (folder / name).is_file():
                 atomic_write_text(target / name, (folder / name).read_text())
+        for picture in sorted(folder.glob(OUTCOME_PICTURES)):  # a planner's one picture per outcome kind
+            (target / "pictures").mkdir(exist_ok=True)
+            atomic_write_bytes(target / "pictures" / picture.name, picture.read_bytes())
         if (folder / ".hydra" / "config.yaml").is_file():
             atomic_write_text(target / "config.yaml", (folder / ".hydra" / "config.yaml").read_text())
         hashes = {str(path.relative_to(folder) if path.is_relative_to(folder) else path): sha256_of(path) for path in checkpoints}

@@ -43,6 +43,7 @@ class PlanJob:
     threshold: float
     pictures: frozenset[int] = frozenset()  # the indices of the tasks that get pictures of their episode ...
     picture_dir: Path | None = None  # ... in this folder (keyin.viz.planning)
+    outcome_pictures: bool = False  # and the first task of each outcome kind: outcome_<kind>_task<i>.png|gif
 
 
 def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
@@ -58,8 +59,8 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
         how = episode_outcome(
             outcome.trajectory.puck, layout.wall, layout.goal, env.task.scene.puck_radius, job.threshold
         )
-        if task.index in job.pictures and job.picture_dir is not None:
-            draw_episode(job, task, outcome)
+        if job.picture_dir is not None:
+            draw_episode(job, task, outcome, picture_names(job, task, how["outcome"]))
     return {
         "task": task.index,
         "planner": job.planner,
@@ -76,14 +77,25 @@ def play(job: PlanJob, task: PlanningTask) -> dict[str, Any]:
     }
 
 
-def draw_episode(job: PlanJob, task: PlanningTask, outcome: Outcome) -> None:
-    """``task<i>.png|gif``: the subgoals over the executed episode (:mod:`keyin.viz.planning`)."""
+def picture_names(job: PlanJob, task: PlanningTask, kind: str) -> list[str]:
+    """The names an episode's pictures get: ``task<i>`` where its index was asked for, and
+    ``outcome_<kind>_task<i>`` where no episode of its outcome kind has a picture in the folder yet
+    (workers check the folder, so two kinds finishing at once may both be drawn: at least one each)."""
+    names = [f"task{task.index:03d}"] if task.index in job.pictures else []
+    if job.outcome_pictures and not any(job.picture_dir.glob(f"outcome_{kind}_task*.png")):
+        names.append(f"outcome_{kind}_task{task.index:03d}")
+    return names
+
+
+def draw_episode(job: PlanJob, task: PlanningTask, outcome: Outcome, names: Sequence[str]) -> None:
+    """``<name>.png|gif`` for every name: the subgoals over the executed episode (:mod:`keyin.viz.planning`)."""
+    if not names:
+        return
     trajectory = outcome.trajectory
     wall = Layout.from_array(task.layout).wall
     frames = job.generator.render_positions(wall, trajectory.puck, trajectory.pusher)
-    save_plan_pictures(
-        job.picture_dir, f"task{task.index:03d}", task.start_image, outcome.images, frames, trajectory.subgoal
-    )
+    for name in names:
+        save_plan_pictures(job.picture_dir, name, task.start_image, outcome.images, frames, trajectory.subgoal)
 
 
 def run_tasks(

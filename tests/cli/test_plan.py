@@ -50,8 +50,25 @@ def test_planners_run_end_to_end(root, planner, subgoals):
         if subgoals:  # a servo episode says how it ended
             assert record["outcome"] in OUTCOMES and (record["outcome"] == "success") == record["success"]
             assert record["closest_error"] <= record["final_error"] and record["puck_moved"] >= 0
-    drawn = ["task000.gif", "task000.png", "task001.gif", "task001.png"] if subgoals else []  # servo episodes only
-    assert sorted(path.name for path in (root / planner / "pictures").glob("*")) == drawn
+    records = journal(root / planner)
+    first_of_kind = {}
+    for record in records if subgoals else []:  # servo episodes only
+        first_of_kind.setdefault(record["outcome"], record["task"])
+    drawn = [f"task00{i}.{ext}" for i in (0, 1) for ext in ("gif", "png")] if subgoals else []
+    drawn += [f"outcome_{kind}_task{i:03d}.{ext}" for kind, i in first_of_kind.items() for ext in ("gif", "png")]
+    assert sorted(path.name for path in (root / planner / "pictures").glob("*")) == sorted(drawn)
+
+
+def test_each_outcome_kind_gets_one_picture_even_where_no_task_is_asked_for(root):
+    result = run("plan", "planner=demo_subgoals", "hydra.run.dir=outcomes", "pictures=0", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr
+    kinds = [record["outcome"] for record in journal(root / "outcomes")]
+    expected = sorted(f"outcome_{kind}_task{kinds.index(kind):03d}.png" for kind in set(kinds))
+    assert sorted(path.name for path in (root / "outcomes" / "pictures").glob("*.png")) == expected
+    off = run("plan", "planner=demo_subgoals", "hydra.run.dir=no_outcomes", "pictures=0", "outcome_pictures=false",
+              "tasks=1", *TINY, cwd=root)
+    assert off.returncode == 0, off.stderr
+    assert len(journal(root / "no_outcomes")) == 1 and not list((root / "no_outcomes" / "pictures").glob("*"))
 
 
 def test_the_pixel_servo_and_the_env_step_budget_run_end_to_end(root):
@@ -65,7 +82,8 @@ def test_the_pixel_servo_and_the_env_step_budget_run_end_to_end(root):
 
 
 def test_a_list_of_tasks_replays_those_tasks_with_their_pictures(root):
-    result = run("plan", "planner=no_subgoals", "hydra.run.dir=chosen", "tasks=[2,0]", "pictures=[2]", *TINY, cwd=root)
+    result = run("plan", "planner=no_subgoals", "hydra.run.dir=chosen", "tasks=[2,0]", "pictures=[2]",
+                 "outcome_pictures=false", *TINY, cwd=root)
     assert result.returncode == 0, result.stderr
     assert sorted(r["task"] for r in journal(root / "chosen")) == [0, 2]
     assert sorted(path.name for path in (root / "chosen" / "pictures").glob("*")) == ["task002.gif", "task002.png"]
@@ -111,6 +129,7 @@ def test_resuming_with_other_settings_is_refused(root):
     (("tasks=[2,999]",), "no task with index [999]"),
     (("pictures=-1",), "pictures=-1 must be an integer n >= 0"),
     (("pictures=[a]",), "or a list of task indices"),
+    (("outcome_pictures=yes",), "outcome_pictures='yes' must be true or false"),
     (("data_dir=elsewhere",), "splits={planning: 240}"),
 ])
 def test_bad_inputs_give_one_error_line(root, overrides, message):

@@ -68,3 +68,18 @@ def test_collect_hashes_the_checkpoints_a_job_wrote_and_the_ones_its_config_read
     hashes = json.loads((tmp_path / "jobs" / "keyin_seed0" / "checkpoints.json").read_text())
     assert hashes == {"checkpoints/stage/last.ckpt": sha256_of(job / "checkpoints" / "stage" / "last.ckpt"), str(model): sha256_of(model)}
     assert (tmp_path / "jobs" / "keyin_seed0" / "config.yaml").read_text().startswith("planner:")
+
+
+def test_collect_copies_a_planners_outcome_pictures_and_no_other_picture(tmp_path):
+    from keyin.cli.reproduce import collect
+
+    job = tmp_path / "sweep" / "keyin_seed0"
+    (job / "pictures").mkdir(parents=True)
+    (job / "metrics.json").write_text('{"planner": "keyin"}')
+    (job / "pictures" / "outcome_not_crossed_task007.png").write_bytes(b"\x89PNG not crossed")
+    (job / "pictures" / "outcome_not_crossed_task007.gif").write_bytes(b"GIF89a")
+    (job / "pictures" / "task000.png").write_bytes(b"\x89PNG first task")
+    assert collect(tmp_path / "sweep", tmp_path / "jobs") == ["keyin_seed0"]
+    copied = tmp_path / "jobs" / "keyin_seed0" / "pictures"
+    assert sorted(path.name for path in copied.iterdir()) == ["outcome_not_crossed_task007.png"]
+    assert (copied / "outcome_not_crossed_task007.png").read_bytes() == b"\x89PNG not crossed"
