@@ -25,6 +25,7 @@ from keyin.planning.journal import claim_run_dir
 from keyin.planning.runner import PlanJob, run_tasks
 from keyin.planning.servo import ServoParams
 from keyin.planning.tasks import PlanningTask, read_tasks, task_generator
+from keyin.pretrained import resolve
 
 
 def task_files(cfg: DictConfig) -> list[Path]:
@@ -93,7 +94,7 @@ def plan(cfg: DictConfig) -> dict:
         "seed": cfg.seed,
         "success_threshold": threshold,
         "task_files": {path.name: sha256_of(path) for path in files},
-        **({"checkpoint_sha256": sha256_of(Path(checkpoint))} if checkpoint else {}),  # resuming refuses a retrained one
+        **({"checkpoint_sha256": sha256_of(resolve(checkpoint))} if checkpoint else {}),  # resuming refuses a retrained one
     })
     job = PlanJob(
         planner=cfg.planner.name,

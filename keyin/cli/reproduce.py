@@ -22,6 +22,7 @@ from keyin.cli import report
 from keyin.cli.app import keyin_main, user_errors
 from keyin.errors import ConfigError, KeyinError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
+from keyin.pretrained import PREFIX, is_pretrained, registry, resolve
 
 STEPS = ("data", "jobs", "collect", "report")
 PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan"}
@@ -50,7 +51,8 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
     """
     copied = []
     for folder in sorted(path for path in sweep_dir.iterdir() if path.is_dir()):
-        checkpoints = sorted(folder.glob("checkpoints/**/*.ckpt")) + read_checkpoints(folder / ".hydra" / "config.yaml")
+        checkpoints = {str(path.relative_to(folder)): path for path in sorted(folder.glob("checkpoints/**/*.ckpt"))}
+        checkpoints |= read_checkpoints(folder / ".hydra" / "config.yaml")
         if not (folder / "metrics.json").is_file() and not checkpoints:
             continue
         target = jobs_dir / folder.name
@@ -63,18 +65,19 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
             atomic_write_bytes(target / "pictures" / picture.name, picture.read_bytes())
         if (folder / ".hydra" / "config.yaml").is_file():
             atomic_write_text(target / "config.yaml", (folder / ".hydra" / "config.yaml").read_text())
-        hashes = {str(path.relative_to(folder) if path.is_relative_to(folder) else path): sha256_of(path) for path in checkpoints}
+        hashes = {name: sha256_of(path) for name, path in checkpoints.items()}
         atomic_write_text(target / "checkpoints.json", json.dumps(hashes, indent=1, sort_keys=True) + "\n")
         copied.append(folder.name)
     return copied
 
 
-def read_checkpoints(config_file: Path) -> list[Path]:
-    """The checkpoint files a job's composed config names (a planner's, a stage 1's) that exist."""
+def read_checkpoints(config_file: Path) -> dict[str, Path]:
+    """The checkpoints a job's composed config names (a planner's, a stage 1's) that exist, by the name
+    the config gives them (a path, or ``pretrained:<name>`` for a model shipped with keyin) → their file."""
     if not config_file.is_file():
-        return []
+        return {}
     values = OmegaConf.to_container(OmegaConf.load(config_file), resolve=False)
-    found: list[Path] = []
+    found: dict[str, Path] = {}
 
     def visit(value: object) -> None:
         if isinstance(value, dict):
@@ -83,11 +86,13 @@ def read_checkpoints(config_file: Path) -> list[Path]:
         elif isinstance(value, list):
             for item in value:
                 visit(item)
+        elif isinstance(value, str) and is_pretrained(value) and value[len(PREFIX):] in registry():
+            found[value] = resolve(value)
         elif isinstance(value, str) and value.endswith(".ckpt") and Path(value).is_file():
-            found.append(Path(value))
+            found[value] = Path(value)
 
     visit(values)
-    return sorted(set(found))
+    return dict(sorted(found.items()))
 
 
 def check_table(cfg: DictConfig) -> None:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from pathlib import Path
 from typing import ClassVar
 
 import lightning as L
@@ -22,6 +21,7 @@ import torch
 
 from keyin.errors import CheckpointError, DatasetFormatError
 from keyin.lit.checkpoints import load_trained_module
+from keyin.pretrained import resolve
 
 
 @functools.cache
@@ -38,14 +38,14 @@ def trained_module(
     Raises:
         CheckpointError: a missing or unloadable file, another stage, model or dataset.
     """
-    path = Path(checkpoint)
     fix = (
         f"the planner needs a model={model} dataset={dataset} checkpoint: make it with `{train_command}` or "
         f"pass planner.checkpoint=<its path>"
     )
-    if not path.is_file():
-        raise CheckpointError(f"checkpoint {path} does not exist; {fix}")
     try:
+        path = resolve(checkpoint)  # a path, or pretrained:<name>
+        if not path.is_file():
+            raise CheckpointError(f"checkpoint {path} does not exist")
         module, config = load_trained_module(path, stage)
     except CheckpointError as err:
         raise CheckpointError(f"{err}; {fix}") from None
@@ -61,7 +61,7 @@ class TrainedPlanner:
     """What every learned high-level planner is configured with (``keyin/conf/planner/<name>.yaml``).
 
     Attributes:
-        checkpoint: path of the trained model's ``last.ckpt``.
+        checkpoint: path of the trained model's ``last.ckpt``, or ``pretrained:<name>`` (:mod:`keyin.pretrained`).
         model, dataset: the ``model=`` and ``dataset=`` it must have been trained with.
         train_command: the keyin-train command that makes it (named when it is missing or wrong).
         torch_threads: torch's intra-op threads in each planning process.

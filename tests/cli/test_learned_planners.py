@@ -8,6 +8,7 @@ import torch
 from hydra import compose, initialize_config_module
 
 from keyin.cli.app import CONFIG_MODULE
+from keyin.pretrained import registry
 from tests.cli.runner import error_line, last_json, run
 
 TRAIN = ("train", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0", "evaluate=false",
@@ -42,6 +43,14 @@ def test_keyin_plans_its_keyframes_as_subgoals(root):
     assert len(json.loads((root / "keyin" / "plan.json").read_text())["checkpoint_sha256"]) == 64
 
 
+def test_a_shipped_model_plans_by_its_name_and_its_hash_is_recorded(root):
+    result = run("plan", "planner=keyin", "planner.checkpoint=pretrained:pushing", "hydra.run.dir=shipped", *TINY, cwd=root)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert last_json(result.stdout)["n_tasks"] == 1
+    shipped = registry()["pushing"]["sha256"]
+    assert json.loads((root / "shipped" / "plan.json").read_text())["checkpoint_sha256"] == shipped
+
+
 def test_resuming_with_a_retrained_checkpoint_is_refused(root):
     checkpoint = root / "copy.ckpt"
     checkpoint.write_bytes((root / KEYFRAMES).read_bytes())
@@ -61,6 +70,8 @@ def test_resuming_with_a_retrained_checkpoint_is_refused(root):
      f"{KEYFRAMES} holds a model=keyin_plus dataset=pushing checkpoint; the planner needs a model=jumpy"),
     (("planner=tap", f"planner.checkpoint={KEYFRAMES}"), "`keyin-train model=tap dataset=pushing"),
     (("planner=tap",), "checkpoint runs/pushing_tap/checkpoints/tap/last.ckpt does not exist"),
+    (("planner=keyin", "planner.checkpoint=pretrained:nothing"), "no pretrained model named 'nothing'"),
+    (("planner=jumpy", "planner.checkpoint=pretrained:pushing"), "holds a model=keyin_plus dataset=pushing checkpoint"),
 ])
 def test_a_missing_or_wrong_checkpoint_gives_one_error_line(root, overrides, message):
     assert message in error_line(run("plan", *overrides, "hydra.run.dir=bad", cwd=root))

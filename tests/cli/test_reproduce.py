@@ -54,6 +54,7 @@ def test_an_unknown_step_or_program_and_a_missing_sweep_folder_name_the_fix(tmp_
 def test_collect_hashes_the_checkpoints_a_job_wrote_and_the_ones_its_config_reads(tmp_path):
     from keyin.cli.reproduce import collect
     from keyin.io import sha256_of
+    from keyin.pretrained import registry
 
     model = tmp_path / "model.ckpt"
     model.write_bytes(b"weights")
@@ -61,12 +62,15 @@ def test_collect_hashes_the_checkpoints_a_job_wrote_and_the_ones_its_config_read
     (job / ".hydra").mkdir(parents=True)
     (job / "checkpoints" / "stage").mkdir(parents=True)
     (job / "checkpoints" / "stage" / "last.ckpt").write_bytes(b"own")
-    (job / ".hydra" / "config.yaml").write_text(f"planner:\n  checkpoint: {model}\n  other: missing.ckpt\n")
+    (job / ".hydra" / "config.yaml").write_text(
+        f"planner:\n  checkpoint: {model}\n  other: missing.ckpt\n  shipped: pretrained:pushing\n  gone: pretrained:nothing\n"
+    )
     (job / "metrics.json").write_text('{"method": "keyin"}')
     (tmp_path / "sweep" / "empty").mkdir()
     assert collect(tmp_path / "sweep", tmp_path / "jobs") == ["keyin_seed0"]
     hashes = json.loads((tmp_path / "jobs" / "keyin_seed0" / "checkpoints.json").read_text())
-    assert hashes == {"checkpoints/stage/last.ckpt": sha256_of(job / "checkpoints" / "stage" / "last.ckpt"), str(model): sha256_of(model)}
+    assert hashes == {"checkpoints/stage/last.ckpt": sha256_of(job / "checkpoints" / "stage" / "last.ckpt"), str(model): sha256_of(model),
+                      "pretrained:pushing": registry()["pushing"]["sha256"]}  # a shipped model by its name
     assert (tmp_path / "jobs" / "keyin_seed0" / "config.yaml").read_text().startswith("planner:")
 
 
