@@ -152,9 +152,9 @@ def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
     for (dataset, method), by_seed in sorted(groups.items(), key=lambda item: (item[0][0], method_sort_key(item[0][1]))):
         values = {score: np.array([float(r.get(score, math.nan)) for r in by_seed.values()]) for score in SCORES}
         ddof = 1 if len(by_seed) > 1 else 0
-        timed = [seed for seed, r in by_seed.items() if all(not math.isnan(float(r.get(s, math.nan))) for s in TIMES)]
+        recorded = np.logical_and.reduce([~np.isnan(values[score]) for score in TIMES])  # per seed
         mean = {score: float(v.mean()) for score, v in values.items()}
-        mean.update({score: float(np.mean([by_seed[seed][score] for seed in timed])) if timed else math.nan for score in TIMES})
+        mean.update({score: float(values[score][recorded].mean()) if recorded.any() else math.nan for score in TIMES})
         rows.append(
             TableRow(
                 dataset=dataset,
@@ -163,7 +163,7 @@ def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
                 mean=mean,
                 std={score: float(v.std(ddof=ddof)) for score, v in values.items()},
                 paper_f1=PAPER_TABLE1.get(dataset, {}).get(method),
-                timed_seeds=sorted(timed),
+                timed_seeds=sorted(seed for seed, timed in zip(by_seed, recorded) if timed),
             )
         )
     return rows
