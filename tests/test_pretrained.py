@@ -95,3 +95,21 @@ def test_the_bundled_example_video_is_the_generators_clip_and_its_labels_its_tur
     assert (decoded.max(axis=-1) == arrays["frames"][..., 0]).all()
     labels = json.loads((pretrained.FOLDER / EXAMPLE_LABELS).read_text())
     assert labels == {EXAMPLE: arrays["keyframes"].nonzero()[0].tolist()}
+
+
+def test_export_slims_run_checkpoints_into_a_folder_named_and_described_by_their_runs(smoke_checkpoint, tmp_path, monkeypatch, capsys):
+    from keyin.pretrained.__main__ import main
+
+    _, path = smoke_checkpoint
+    monkeypatch.setattr("sys.argv", ["keyin.pretrained", "export", str(path), "--folder", str(tmp_path / "models")])
+    main()
+    file = tmp_path / "models" / "run.ckpt"  # the run dir's name
+    assert capsys.readouterr().out.strip() == str(file)
+    card = json.loads((tmp_path / "models" / "models.json").read_text())["run"]
+    assert card["command"].startswith("keyin-train experiment=brownian_keyin scale=smoke ")  # its .hydra/hydra.yaml
+    assert card["source_sha256"] == sha256_of(path) and card["sha256"] == sha256_of(file)
+    full, slim = load_checkpoint(path), load_checkpoint(file)  # a plain path loads as any checkpoint
+    assert slim["state_dict"].keys() == full["state_dict"].keys() and "optimizer_states" not in slim
+    monkeypatch.setattr("sys.argv", ["keyin.pretrained", "export", str(path), str(path), "--name", "x"])
+    with pytest.raises(SystemExit, match="--name and --command name one checkpoint"):
+        main()

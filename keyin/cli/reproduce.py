@@ -1,7 +1,9 @@
 """keyin-reproduce table=<name>: data, every job, their small files and the report of one committed table.
 
 The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
-(each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped) and the
+(each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped,
+or a ``python -m keyin.pretrained export`` of trained models into a committed folder; a sweep whose
+``creates`` files all exist is skipped: the models a table plans with are committed) and the
 folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``, a
 planner's one picture per outcome kind), its composed ``config.yaml`` and the SHA-256 of every checkpoint
 it wrote or read (``checkpoints.json``) are copied to ``<out>/jobs/<job>/``, so the report, built from
@@ -16,7 +18,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf.errors import InterpolationResolutionError
 
 from keyin.cli import report
 from keyin.cli.app import keyin_main, user_errors
@@ -25,13 +28,19 @@ from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.pretrained import PREFIX, is_pretrained, registry, resolve
 
 STEPS = ("data", "jobs", "collect", "report")
-PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan"}
+PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan", "export": "keyin.pretrained"}
 SMALL_FILES = ("metrics.json", "predictions.json", "tasks.jsonl")  # copied as they are; the config comes from .hydra/
 OUTCOME_PICTURES = "pictures/outcome_*.png"  # keyin-plan's first episode of each outcome kind
 
 
+def made_already(sweep: DictConfig) -> bool:
+    """Whether every file the sweep ``creates`` exists (False for a sweep that names none)."""
+    created = sweep.get("creates") or []
+    return bool(created) and all(Path(path).is_file() for path in created)
+
+
 def commands(cfg: DictConfig) -> list[list[str]]:
-    """The keyin-generate and sweep calls of the chosen steps, in order."""
+    """The keyin-generate and sweep calls of the chosen steps, in order, without the sweeps made already."""
     table, calls = cfg.table, []
     if "data" in cfg.steps:
         for entry in table.data:
@@ -39,7 +48,12 @@ def commands(cfg: DictConfig) -> list[list[str]]:
             calls.append(["keyin.cli.generate", f"dataset={entry.dataset}", f"splits={splits}", f"data_dir={cfg.data_dir}"])
     if "jobs" in cfg.steps:
         for sweep in table.sweeps:
-            calls.append([PROGRAMS[sweep.program], "-m", *sweep.overrides, f"data_dir={cfg.data_dir}"])
+            if made_already(sweep):
+                continue
+            if sweep.program == "export":
+                calls.append([PROGRAMS["export"], "export", *sweep.overrides])
+            else:
+                calls.append([PROGRAMS[sweep.program], "-m", *sweep.overrides, f"data_dir={cfg.data_dir}"])
     return calls
 
 
@@ -73,25 +87,26 @@ def collect(sweep_dir: Path, jobs_dir: Path) -> list[str]:
 
 def read_checkpoints(config_file: Path) -> dict[str, Path]:
     """The checkpoints a job's composed config names (a planner's, a stage 1's) that exist, by the name
-    the config gives them (a path, or ``pretrained:<name>`` for a model shipped with keyin) → their file."""
+    the config gives them (a path, or ``pretrained:<name>`` for a model shipped with keyin) → their file.
+    A value with interpolations (``models/${planner.model}_seed${seed}.ckpt``) counts as it resolves; one
+    that does not resolve outside its run (``${hydra:...}``) is passed over."""
     if not config_file.is_file():
         return {}
-    values = OmegaConf.to_container(OmegaConf.load(config_file), resolve=False)
     found: dict[str, Path] = {}
 
-    def visit(value: object) -> None:
-        if isinstance(value, dict):
-            for item in value.values():
-                visit(item)
-        elif isinstance(value, list):
-            for item in value:
-                visit(item)
-        elif isinstance(value, str) and is_pretrained(value) and value[len(PREFIX):] in registry():
-            found[value] = resolve(value)
-        elif isinstance(value, str) and value.endswith(".ckpt") and Path(value).is_file():
-            found[value] = Path(value)
+    def visit(node: object) -> None:
+        if isinstance(node, (DictConfig, ListConfig)):
+            for key in node.keys() if isinstance(node, DictConfig) else range(len(node)):
+                try:
+                    visit(node[key])
+                except InterpolationResolutionError:
+                    continue
+        elif isinstance(node, str) and is_pretrained(node) and node[len(PREFIX):] in registry():
+            found[node] = resolve(node)
+        elif isinstance(node, str) and node.endswith(".ckpt") and Path(node).is_file():
+            found[node] = Path(node)
 
-    visit(values)
+    visit(OmegaConf.load(config_file))
     return dict(sorted(found.items()))
 
 

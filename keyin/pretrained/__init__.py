@@ -75,6 +75,7 @@ def export(checkpoint: Mapping[str, Any], name: str, card: Mapping[str, Any], fo
     training command, the source checkpoint's hash, ...) in ``models.json``."""
     buffer = io.BytesIO()
     torch.save(slim_checkpoint(checkpoint), buffer)
+    folder.mkdir(parents=True, exist_ok=True)
     file = folder / f"{name}.ckpt"
     atomic_write_bytes(file, buffer.getvalue())
     models = registry(folder)

@@ -1,6 +1,9 @@
 """Maintainers' commands for what keyin ships (docs/models.md):
 
     python -m keyin.pretrained export <checkpoint> --name brownian --command "keyin-reproduce table=..."
+    python -m keyin.pretrained export <run dir>/checkpoints/keyframes/last.ckpt ... --folder <dir>
+        # slim copies outside the package (a table's models), each named after its run dir, its
+        # command read from the run's .hydra/hydra.yaml
     python -m keyin.pretrained example     # the example video `make demo` discovers the keyframes of
 """
 
@@ -11,8 +14,10 @@ import json
 from pathlib import Path
 
 import imageio.v3 as iio
+from omegaconf import OmegaConf
 
 from keyin.data.brownian import BrownianGenerator
+from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.pretrained import FOLDER, export
@@ -21,12 +26,34 @@ EXAMPLE = "brownian_example.gif"  # 200 frames of Structured Brownian motion, 10
 EXAMPLE_LABELS = "brownian_example_labels.json"  # its direction changes, keyin-import's label format
 
 
+def run_dir(checkpoint: Path) -> Path:
+    """The keyin-train run folder of ``<run dir>/checkpoints/<stage>/last.ckpt``."""
+    return checkpoint.parents[2]
+
+
+def run_command(checkpoint: Path) -> str:
+    """The keyin-train call that wrote ``checkpoint``, from its run's ``.hydra/hydra.yaml``.
+
+    Raises:
+        CheckpointError: the run folder has no such file (name the command with --command).
+    """
+    path = run_dir(checkpoint) / ".hydra" / "hydra.yaml"
+    if not path.is_file():
+        raise CheckpointError(f"{path} is missing, so the command that trained {checkpoint} is unknown; pass --command")
+    hydra = OmegaConf.load(path).hydra
+    multirun = " -m" if hydra.mode == "MULTIRUN" else ""
+    return f"keyin-train{multirun} " + " ".join(hydra.overrides.task)
+
+
 def export_command(args: argparse.Namespace) -> None:
-    checkpoint = load_checkpoint(args.checkpoint)
-    config = checkpoint["keyin_config"]
-    card = {"command": args.command, "source_sha256": sha256_of(args.checkpoint), "stage": checkpoint["keyin_stage"],
-            "model": config["model"]["name"], "dataset": config["dataset"]["name"]}
-    print(export(checkpoint, args.name, card))
+    if len(args.checkpoints) > 1 and (args.name or args.command):
+        raise SystemExit("--name and --command name one checkpoint; with several, each takes its run dir's")
+    for path in args.checkpoints:
+        checkpoint = load_checkpoint(path)
+        config = checkpoint["keyin_config"]
+        card = {"command": args.command or run_command(path), "source_sha256": sha256_of(path),
+                "stage": checkpoint["keyin_stage"], "model": config["model"]["name"], "dataset": config["dataset"]["name"]}
+        print(export(checkpoint, args.name or run_dir(path).name, card, args.folder))
 
 
 def example_command(args: argparse.Namespace) -> None:
@@ -42,10 +69,11 @@ def example_command(args: argparse.Namespace) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(required=True)
-    ship = commands.add_parser("export", help="ship a trained checkpoint as pretrained:<name>")
-    ship.add_argument("checkpoint", type=Path, help="a keyin-train checkpoint (checkpoints/keyframes/last.ckpt)")
-    ship.add_argument("--name", required=True, help="the name it loads by: ckpt=pretrained:<name>")
-    ship.add_argument("--command", required=True, help="the command that trained it (for the model card)")
+    ship = commands.add_parser("export", help="ship a trained checkpoint as pretrained:<name> (or slim it into --folder)")
+    ship.add_argument("checkpoints", type=Path, nargs="+", help="keyin-train checkpoints (checkpoints/keyframes/last.ckpt)")
+    ship.add_argument("--name", help="the name it loads by: ckpt=pretrained:<name> (default: its run dir's name)")
+    ship.add_argument("--command", help="the command that trained it, for the model card (default: its run's)")
+    ship.add_argument("--folder", type=Path, default=FOLDER, help="where to write it and its models.json (default: the package)")
     ship.set_defaults(run=export_command)
     commands.add_parser("example", help="write the bundled example video and its labels").set_defaults(run=example_command)
     args = parser.parse_args()

@@ -38,7 +38,7 @@ def test_keyin_plans_its_keyframes_as_subgoals(root):
     assert result.returncode == 0, result.stderr[-3000:]
     assert last_json(result.stdout)["n_tasks"] == 1
     (record,) = [json.loads(line) for line in (root / "keyin" / "tasks.jsonl").read_text().splitlines()]
-    assert record["planner"] == "keyin" and record["steps"] == 3 and record["subgoals"] == 6 + 1  # K^1..K^6, goal
+    assert record["planner"] == "keyin_plus" and record["steps"] == 3 and record["subgoals"] == 6 + 1  # K^1..K^6, goal
     assert 0 <= record["plan_samples_without_puck"] <= 8 and 0 <= record["plan_cost_px"] <= 64 * 2**0.5
     assert len(json.loads((root / "keyin" / "plan.json").read_text())["checkpoint_sha256"]) == 64
 
@@ -87,3 +87,17 @@ def test_jumpy_is_the_latent_cem_with_the_jumpy_model_and_table2_sweeps_the_lear
     assert jumpy.checkpoint == "runs/multirun/pushing_table1/jumpy_seed0/checkpoints/keyframes/last.ckpt"
     assert jumpy.keyframe_samples == 200 and jumpy.keyframe_elites == 10 and jumpy.keyframe_iterations == 3
     assert {"keyin", "jumpy", "surprise", "tap"} <= set(sweep.split(","))
+
+
+def test_a_latent_cem_row_is_named_after_the_model_it_plans_with():
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        rows = {
+            overrides: compose("plan", overrides=["experiment=pushing_table2", *overrides, "seed=1"]).planner
+            for overrides in (("planner=keyin",), ("planner=keyin", "planner.model=keyin_paper"), ("planner=jumpy",))
+        }
+        paper, published = (compose("train", overrides=[f"model={name}"]).model for name in ("keyin_paper", "keyin"))
+    assert [planner.name for planner in rows.values()] == ["keyin_plus", "keyin_paper", "jumpy"]
+    keyin_paper = rows[("planner=keyin", "planner.model=keyin_paper")]
+    assert keyin_paper.checkpoint == "runs/multirun/pushing_table1/keyin_paper_seed1/checkpoints/keyframes/last.ckpt"
+    assert keyin_paper.controller.subgoals.train_command.endswith("model=keyin_paper seed=1")
+    assert paper == published and paper.name == "keyin_paper"  # the command it names trains the paper's model

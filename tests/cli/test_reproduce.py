@@ -42,11 +42,30 @@ def test_a_dry_run_prints_the_commands_and_runs_none(tmp_path):
     assert not (tmp_path / "data").exists() and not (tmp_path / "results").exists()
 
 
+def test_a_sweep_whose_files_exist_is_skipped_and_an_export_runs_the_pretrained_command(tmp_path):
+    from omegaconf import OmegaConf
+
+    from keyin.cli.reproduce import commands
+
+    made = tmp_path / "made.ckpt"
+    made.write_bytes(b"weights")
+    sweeps = [
+        {"program": "train", "overrides": ["model=jumpy"], "creates": [str(made)]},  # made already: skipped
+        {"program": "train", "overrides": ["model=static"], "creates": [str(made), str(tmp_path / "missing.ckpt")]},
+        {"program": "export", "overrides": ["runs/a/checkpoints/keyframes/last.ckpt", "--folder", "models"]},
+    ]
+    cfg = OmegaConf.create({"steps": ["jobs"], "data_dir": "data", "table": {"data": [], "sweeps": sweeps}})
+    assert commands(cfg) == [
+        ["keyin.cli.train", "-m", "model=static", "data_dir=data"],
+        ["keyin.pretrained", "export", "runs/a/checkpoints/keyframes/last.ckpt", "--folder", "models"],
+    ]
+
+
 def test_an_unknown_step_or_program_and_a_missing_sweep_folder_name_the_fix(tmp_path):
     bad = run("reproduce", "table=brownian_table1", "steps=[data,train]", cwd=tmp_path)
     assert bad.returncode == 2 and "['train'] are not steps; use any of ['data', 'jobs', 'collect', 'report']" in bad.stderr
     program = run("reproduce", "table=brownian_table1", "table.sweeps.0.program=fit", cwd=tmp_path)
-    assert program.returncode == 2 and "table.sweeps[0].program='fit' must be one of ['eval', 'plan', 'train']" in program.stderr
+    assert program.returncode == 2 and "table.sweeps[0].program='fit' must be one of ['eval', 'export', 'plan', 'train']" in program.stderr
     missing = run("reproduce", "table=brownian_table1", "steps=[collect]", cwd=tmp_path)
     assert missing.returncode == 2 and "does not exist: run the jobs first (steps=[jobs])" in missing.stderr
 
@@ -58,19 +77,23 @@ def test_collect_hashes_the_checkpoints_a_job_wrote_and_the_ones_its_config_read
 
     model = tmp_path / "model.ckpt"
     model.write_bytes(b"weights")
+    (tmp_path / "named.ckpt").write_bytes(b"named weights")
     job = tmp_path / "sweep" / "keyin_seed0"
     (job / ".hydra").mkdir(parents=True)
     (job / "checkpoints" / "stage").mkdir(parents=True)
     (job / "checkpoints" / "stage" / "last.ckpt").write_bytes(b"own")
     (job / ".hydra" / "config.yaml").write_text(
         f"planner:\n  checkpoint: {model}\n  other: missing.ckpt\n  shipped: pretrained:pushing\n  gone: pretrained:nothing\n"
+        f"  name: named\n  by_name: {tmp_path}/${{planner.name}}.ckpt\n  runtime: ${{hydra:runtime.cwd}}/x.ckpt\n"
+        f"  listed: ['${{planner.checkpoint}}']\n"
     )
     (job / "metrics.json").write_text('{"method": "keyin"}')
     (tmp_path / "sweep" / "empty").mkdir()
     assert collect(tmp_path / "sweep", tmp_path / "jobs") == ["keyin_seed0"]
     hashes = json.loads((tmp_path / "jobs" / "keyin_seed0" / "checkpoints.json").read_text())
     assert hashes == {"checkpoints/stage/last.ckpt": sha256_of(job / "checkpoints" / "stage" / "last.ckpt"), str(model): sha256_of(model),
-                      "pretrained:pushing": registry()["pushing"]["sha256"]}  # a shipped model by its name
+                      "pretrained:pushing": registry()["pushing"]["sha256"],  # a shipped model by its name
+                      str(tmp_path / "named.ckpt"): sha256_of(tmp_path / "named.ckpt")}  # as its interpolation resolves
     assert (tmp_path / "jobs" / "keyin_seed0" / "config.yaml").read_text().startswith("planner:")
 
 

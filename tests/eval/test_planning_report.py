@@ -116,14 +116,14 @@ def test_the_success_interval_is_the_binomial_one_for_many_tasks():
 
 
 def test_the_paired_difference_counts_only_the_tasks_both_played(tmp_path):
-    write_job(tmp_path, "keyin", 0, [0.1, 0.1, 0.1, 1.0, 0.1])  # succeeds on tasks 0, 1, 2, 4
+    write_job(tmp_path, "keyin_plus", 0, [0.1, 0.1, 0.1, 1.0, 0.1])  # succeeds on tasks 0, 1, 2, 4
     write_job(tmp_path, "jumpy", 0, [0.1, 1.0, 0.1, 1.0])  # tasks 0 and 2; task 4 never played
     rows = {row.planner: row for row in summarise_planning(collect_planning(tmp_path), 0.66)}
-    difference = paired_success_difference(rows["keyin"], rows["jumpy"], 0.66)
+    difference = paired_success_difference(rows["keyin_plus"], rows["jumpy"], 0.66)
     assert difference["n_tasks"] == 4 and difference["difference"] == pytest.approx(0.25)
     assert difference["low"] <= 0.25 <= difference["high"]
     same = paired_success_difference(rows["jumpy"], rows["jumpy"], 0.66)
     assert (same["difference"], same["low"], same["high"]) == (0.0, 0.0, 0.0)
     line = difference_markdown(list(rows.values()), 0.66)
-    assert line.startswith("- keyin − jumpy success: +25.0 points, 95 % paired bootstrap interval [")
-    assert difference_markdown([rows["keyin"]], 0.66) == ""
+    assert line.startswith("- keyin_plus − jumpy success: +25.0 points, 95 % paired bootstrap interval [")
+    assert difference_markdown([rows["keyin_plus"]], 0.66) == ""
