@@ -47,6 +47,8 @@ class PlanningRow:
         tasks: (seed, task index) of each of its n tasks, in the order of ``errors``.
         errors, initial: (n,) final and initial shortest-path distances of its tasks.
         summary: :func:`keyin.eval.planning.planning_summary` of them.
+        seed_success: each seed's success rate, in ``seeds`` order (its spread is the model seeds').
+        seconds_per_task: the tasks' mean wall time in one worker process (one core each).
         paper: the paper's (error mean, error std, success %) or None.
         outcomes: how many of its tasks ended in each :data:`keyin.eval.planning.OUTCOMES` (servo
             episodes of a keyin-plan that records them), ``not recorded`` for the others.
@@ -59,6 +61,8 @@ class PlanningRow:
     initial: np.ndarray
     steps_mean: float
     summary: dict[str, float | int]
+    seed_success: list[float]
+    seconds_per_task: float
     paper: tuple[float, float, float | None] | None
     outcomes: dict[str, int]
 
@@ -124,6 +128,11 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
                 initial=initial,
                 steps_mean=float(np.mean([task["steps"] for task in tasks])),
                 summary=planning_summary(errors, initial, threshold),
+                seed_success=[
+                    float(np.mean([task["final_error"] <= threshold for task in groups[planner][seed]["tasks"]]))
+                    for seed in sorted(groups[planner])
+                ],
+                seconds_per_task=float(np.mean([task["seconds"] for task in tasks])),
                 paper=PAPER_TABLE2.get(planner),
                 outcomes=dict(Counter(task.get("outcome", NOT_RECORDED) for task in tasks)),
             )
@@ -176,13 +185,21 @@ def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[
     return "\n".join(lines) + ("\n" if lines else "")
 
 
+def seed_spread(row: PlanningRow) -> str:
+    """The success rate's mean ± std over the row's seeds (sample std), ``–`` for one seed."""
+    if len(row.seed_success) < 2:
+        return "–"
+    rates = 100 * np.array(row.seed_success)
+    return f"{rates.mean():.1f} ± {rates.std(ddof=1):.1f} %"
+
+
 def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
     """Table 2 as Markdown: position error mean ± std and success rate (with its 95 % bootstrap
-    interval over tasks), ours beside the paper's."""
+    interval over tasks, and its spread over seeds), ours beside the paper's."""
     lines = [
         f"| planner | position error (ours) | position error (paper) | success ≤ {threshold:g} (ours) [95 % interval] | "
-        f"success (paper) | final / initial | steps | tasks | seeds |",
-        "|---|---|---|---|---|---|---|---|---|",
+        f"mean ± std over seeds | success (paper) | final / initial | steps | s / task | tasks | seeds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         s = row.summary
@@ -191,8 +208,8 @@ def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
         lines.append(
             f"| {row.planner} | {s['position_error_mean']:.2f} ± {s['position_error_std']:.2f} | {paper_error} | "
             f"{100 * s['success_rate']:.1f} % [{100 * s['success_rate_low']:.1f}, {100 * s['success_rate_high']:.1f}] | "
-            f"{paper_success} | {s['relative_error_mean']:.2f} | "
-            f"{row.steps_mean:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
+            f"{seed_spread(row)} | {paper_success} | {s['relative_error_mean']:.2f} | "
+            f"{row.steps_mean:.1f} | {row.seconds_per_task:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -217,14 +234,14 @@ def planning_csv(rows: list[PlanningRow], threshold: float) -> str:
     stats = ("position_error_mean", "position_error_std", "success_rate", "success_rate_low", "success_rate_high",
              "relative_error_mean",
              "initial_distance_mean")
-    writer.writerow(["planner", "seeds", "n_tasks", "success_threshold", *stats, "steps_mean",
-                     "paper_error_mean", "paper_error_std", "paper_success_percent"])
+    writer.writerow(["planner", "seeds", "n_tasks", "success_threshold", *stats, "seed_success_rates", "steps_mean",
+                     "seconds_per_task", "paper_error_mean", "paper_error_std", "paper_success_percent"])
     for row in rows:
         paper = row.paper or (None, None, None)
         writer.writerow(
             [row.planner, " ".join(map(str, row.seeds)), row.summary["n_tasks"], f"{threshold:g}"]
             + [f"{row.summary[stat]:.6g}" for stat in stats]
-            + [f"{row.steps_mean:.6g}"]
+            + [" ".join(f"{rate:.6g}" for rate in row.seed_success), f"{row.steps_mean:.6g}", f"{row.seconds_per_task:.6g}"]
             + ["" if value is None else value for value in paper]
         )
     return out.getvalue()

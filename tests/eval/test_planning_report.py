@@ -57,12 +57,21 @@ def test_rows_pool_the_tasks_of_every_seed_in_the_papers_order(sweep):
     assert no_subgoals.summary["position_error_mean"] == pytest.approx(0.75)
     assert no_subgoals.summary["success_rate"] == 0.5 and no_subgoals.paper == (0.90, 0.14, 15.0)
     markdown = planning_markdown(rows, 0.66)
-    assert "| initial | 1.25 ± 0.00 | 1.32 ± 0.06 | 0.0 % [0.0, 0.0] | – |" in markdown
-    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 50.0 % [0.0, 100.0] | 15.0 % | 0.60 | 10.0 | 4 | 0 1 |" in markdown
-    assert "| demo_subgoals | 0.10 ± 0.00 | – | 100.0 % [100.0, 100.0] | – |" in markdown
+    assert "| initial | 1.25 ± 0.00 | 1.32 ± 0.06 | 0.0 % [0.0, 0.0] | – | – |" in markdown  # one seed: no spread
+    # seeds 0 and 1 succeed on 1 of 2 tasks each: 50 % ± 0 over seeds; every task took 1 s
+    assert "| no_subgoals | 0.75 ± 0.38 | 0.90 ± 0.14 | 50.0 % [0.0, 100.0] | 50.0 ± 0.0 % | 15.0 % | 0.60 | 10.0 | 1.0 | 4 | 0 1 |" in markdown
+    assert "| demo_subgoals | 0.10 ± 0.00 | – | 100.0 % [100.0, 100.0] | – | – |" in markdown
     lines = planning_csv(rows, 0.66).splitlines()
     assert len(lines) == 4 and lines[0].startswith("planner,seeds,n_tasks,success_threshold,position_error_mean")
-    assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.9,0.14,15.0")
+    assert lines[2].startswith("no_subgoals,0 1,4,0.66,0.75,") and lines[2].endswith(",0.5 0.5,10,1,0.9,0.14,15.0")
+
+
+def test_the_spread_over_seeds_is_the_sample_std_of_each_seeds_success_rate(tmp_path):
+    for seed, errors in enumerate(([0.1, 0.1, 0.1, 1.0], [0.1, 1.0, 1.0, 1.0], [0.1, 0.1, 1.0, 1.0])):
+        write_job(tmp_path, "jumpy", seed, errors)  # 75 %, 25 %, 50 %: std 25 points
+    (row,) = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert row.seed_success == [0.75, 0.25, 0.5] and row.summary["success_rate"] == 0.5
+    assert "| 50.0 % [" in planning_markdown([row], 0.66) and "| 50.0 ± 25.0 % |" in planning_markdown([row], 0.66)
 
 
 def test_the_success_curves_run_from_zero_past_every_error(sweep):
