@@ -115,6 +115,8 @@ def plan(cfg: DictConfig) -> dict:
     )
     metrics.update(
         planner=cfg.planner.name,
+        servo_observe=servo.observe,  # the servo setting (keyin-report names a row of another than the default)
+        servo_action_repeat=servo.action_repeat,
         dataset=cfg.dataset.name,
         seed=cfg.seed,
         success_threshold=threshold,

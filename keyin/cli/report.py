@@ -28,6 +28,7 @@ from keyin.eval.planning_report import (
     outcome_markdown,
     planning_csv,
     planning_markdown,
+    sensitivity_markdown,
     success_curves,
     summarise_planning,
     sweep_threshold,
@@ -127,7 +128,14 @@ def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> lis
             "of the wall's centre line, `crossed missed` crossed it and stopped away from the goal.\n\n" + outcomes
         )
     differences = difference_markdown(rows, threshold)
-    text = header + planning_markdown(rows, threshold) + ("\n" + differences if differences else "") + outcomes
+    sensitivity = sensitivity_markdown(rows, threshold)
+    if sensitivity:
+        sensitivity = (
+            "\n## Servo settings\n\nThe servo observing the true puck position (`state`) or segmenting it from the "
+            "rendered 64×64 image (`pixels`), its time budget counted in servo steps (2 environment steps) or in "
+            "environment steps; success on the tasks each planner played in every setting.\n\n" + sensitivity
+        )
+    text = header + planning_markdown(rows, threshold) + ("\n" + differences if differences else "") + sensitivity + outcomes
     written = [out / "table2.md", out / "table2.csv"]
     atomic_write_text(written[0], text)
     atomic_write_text(written[1], planning_csv(rows, threshold))

@@ -35,15 +35,21 @@ PAPER_TABLE2 = {
     "keyin_plus": (0.50, 0.26, 64.2),
 }
 PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
+# The servo settings a job records in its metrics.json (keyin-plan since 0.2), with the defaults a job
+# that records none ran with; a row of another setting is named after it (``jumpy · pixels · env steps``).
+SERVO_DEFAULTS = {"servo_observe": "state", "servo_action_repeat": 2}
 CURVE_END = 1.6  # world units: the success curves reach at least this threshold (past the initial distances)
 NOT_RECORDED = "not recorded"
 
 
 @dataclass
 class PlanningRow:
-    """One planner over all its tasks.
+    """One planner in one servo setting over all its tasks.
 
     Attributes:
+        planner: the row's name: ``base``, followed by its ``setting`` unless the default.
+        base: the planner's name (``metrics.json``'s ``planner``).
+        setting: :func:`servo_setting` of its jobs.
         tasks: (seed, task index) of each of its n tasks, in the order of ``errors``.
         errors, initial: (n,) final and initial shortest-path distances of its tasks.
         summary: :func:`keyin.eval.planning.planning_summary` of them.
@@ -55,6 +61,8 @@ class PlanningRow:
     """
 
     planner: str
+    base: str
+    setting: str
     seeds: list[int]
     tasks: list[tuple[int, int]]
     errors: np.ndarray
@@ -106,31 +114,52 @@ def planner_sort_key(planner: str) -> tuple[int, str]:
     return (PLANNER_ORDER.index(planner) if planner in PLANNER_ORDER else len(PLANNER_ORDER), planner)
 
 
+def servo_setting(job: dict[str, Any]) -> str:
+    """How a job's servo observed and counted time: ``state · servo steps`` (the default),
+    ``pixels · env steps`` (colour segmentation, one action per environment step), ..."""
+    observe = job.get("servo_observe", SERVO_DEFAULTS["servo_observe"])
+    repeat = int(job.get("servo_action_repeat", SERVO_DEFAULTS["servo_action_repeat"]))
+    unit = {1: "env steps", 2: "servo steps"}.get(repeat, f"{repeat} env steps per servo step")
+    return f"{observe} · {unit}"
+
+
+DEFAULT_SETTING = servo_setting({})
+
+
+def row_name(planner: str, setting: str) -> str:
+    return planner if setting == DEFAULT_SETTING else f"{planner} · {setting}"
+
+
 def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[PlanningRow]:
-    """One row per planner, its tasks of every seed pooled.
+    """One row per planner and servo setting, its tasks of every seed pooled.
 
     Raises:
-        ValueError: if a (planner, seed) appears twice (two sweeps under one root).
+        ValueError: if a (planner, setting, seed) appears twice (two sweeps under one root).
     """
-    groups = group_by_seed(jobs, lambda job: job["planner"], lambda job: f"planner {job['planner']}")
+    groups = group_by_seed(
+        jobs, lambda job: (job["planner"], servo_setting(job)), lambda job: f"planner {row_name(job['planner'], servo_setting(job))}"
+    )
     rows = []
-    for planner in sorted(groups, key=planner_sort_key):
-        tasks = [task for job in groups[planner].values() for task in job["tasks"]]
-        keys = [(seed, task["task"]) for seed, job in groups[planner].items() for task in job["tasks"]]
+    for key in sorted(groups, key=lambda key: (key[1] != DEFAULT_SETTING, key[1], *planner_sort_key(key[0]))):
+        planner, setting = key
+        tasks = [task for job in groups[key].values() for task in job["tasks"]]
+        keys = [(seed, task["task"]) for seed, job in groups[key].items() for task in job["tasks"]]
         errors = np.array([task["final_error"] for task in tasks], dtype=np.float64)
         initial = np.array([task["initial_distance"] for task in tasks], dtype=np.float64)
         rows.append(
             PlanningRow(
-                planner=planner,
-                seeds=sorted(groups[planner]),
+                planner=row_name(planner, setting),
+                base=planner,
+                setting=setting,
+                seeds=sorted(groups[key]),
                 tasks=keys,
                 errors=errors,
                 initial=initial,
                 steps_mean=float(np.mean([task["steps"] for task in tasks])),
                 summary=planning_summary(errors, initial, threshold),
                 seed_success=[
-                    float(np.mean([task["final_error"] <= threshold for task in groups[planner][seed]["tasks"]]))
-                    for seed in sorted(groups[planner])
+                    float(np.mean([task["final_error"] <= threshold for task in groups[key][seed]["tasks"]]))
+                    for seed in sorted(groups[key])
                 ],
                 seconds_per_task=float(np.mean([task["seconds"] for task in tasks])),
                 paper=PAPER_TABLE2.get(planner),
@@ -211,6 +240,28 @@ def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
             f"{seed_spread(row)} | {paper_success} | {s['relative_error_mean']:.2f} | "
             f"{row.steps_mean:.1f} | {row.seconds_per_task:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
         )
+    return "\n".join(lines) + "\n"
+
+
+def sensitivity_markdown(rows: list[PlanningRow], threshold: float) -> str:
+    """Each planner planned in several servo settings: its success rate in each, with its 95 %
+    bootstrap interval, on the tasks (seed, task) it played in all of them; empty if none was."""
+    settings: dict[str, list[PlanningRow]] = {}
+    for row in rows:
+        settings.setdefault(row.base, []).append(row)
+    settings = {base: group for base, group in settings.items() if len(group) > 1}
+    if not settings:
+        return ""
+    columns = sorted({row.setting for group in settings.values() for row in group}, key=lambda s: (s != DEFAULT_SETTING, s))
+    lines = [f"| planner | " + " | ".join(columns) + " | common tasks |", "|---" * (len(columns) + 2) + "|"]
+    for base, group in settings.items():
+        common = set.intersection(*(set(row.tasks) for row in group))
+        cells = {}
+        for row in group:
+            successes = np.array([error <= threshold for key, error in zip(row.tasks, row.errors) if key in common], dtype=float)
+            low, high = bootstrap_interval(successes)
+            cells[row.setting] = f"{100 * successes.mean():.1f} % [{100 * low:.1f}, {100 * high:.1f}]" if common else "–"
+        lines.append(f"| {base} | " + " | ".join(cells.get(column, "–") for column in columns) + f" | {len(common)} |")
     return "\n".join(lines) + "\n"
 
 

@@ -77,6 +77,8 @@ def test_the_pixel_servo_and_the_env_step_budget_run_end_to_end(root):
     assert result.returncode == 0, result.stderr
     settings = json.loads((root / "pixels" / "plan.json").read_text())["planner"]
     assert settings["servo_observe"] == "pixels" and settings["servo_action_repeat"] == 1
+    metrics = last_json(result.stdout)  # what keyin-report names the row by
+    assert (metrics["servo_observe"], metrics["servo_action_repeat"]) == ("pixels", 1)
     records = journal(root / "pixels")
     assert [r["task"] for r in records] == [0, 1] and all(r["steps"] == 3 and r["subgoals"] == 7 for r in records)
 

@@ -14,13 +14,14 @@ from keyin.eval.planning_report import (
     paired_success_difference,
     planning_csv,
     planning_markdown,
+    sensitivity_markdown,
     success_curves,
     summarise_planning,
 )
 
 
-def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None):
-    job = root / f"{planner}_seed{seed}"
+def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, **setting):
+    job = root / f"{planner}_seed{seed}{''.join(f'_{value}' for value in setting.values())}"
     job.mkdir(parents=True)
     records = [dict(task=i, planner=planner, seed=seed, final_error=e, initial_distance=1.25, steps=10, subgoals=1,
                     subgoals_used=1, success=e <= threshold, seconds=1.0) for i, e in enumerate(errors)]
@@ -28,7 +29,7 @@ def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outco
         record["outcome"] = outcome
     (job / "tasks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in reversed(records)) + extra_lines)
     metrics = dict(planning_summary(np.array(errors), np.full(len(errors), 1.25), threshold), planner=planner,
-                   seed=seed, dataset="pushing", success_threshold=threshold)
+                   seed=seed, dataset="pushing", success_threshold=threshold, **setting)
     (job / "metrics.json").write_text(json.dumps(metrics))
 
 
@@ -136,3 +137,21 @@ def test_the_paired_difference_counts_only_the_tasks_both_played(tmp_path):
     line = difference_markdown(list(rows.values()), 0.66)
     assert line.startswith("- keyin_plus − jumpy success: +25.0 points, 95 % paired bootstrap interval [")
     assert difference_markdown([rows["keyin_plus"]], 0.66) == ""
+
+
+def test_a_servo_setting_is_its_own_row_and_the_sensitivity_table_pairs_the_tasks(tmp_path):
+    write_job(tmp_path, "jumpy", 0, [0.1, 0.1, 1.0, 0.1])  # no setting recorded: state, servo steps
+    write_job(tmp_path, "jumpy", 0, [0.1, 1.0, 1.0], servo_observe="pixels", servo_action_repeat=2)  # tasks 0-2
+    write_job(tmp_path, "jumpy", 0, [1.0, 1.0, 1.0, 1.0], servo_observe="state", servo_action_repeat=1)
+    write_job(tmp_path, "no_subgoals", 0, [1.0, 1.0])
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert [row.planner for row in rows] == ["no_subgoals", "jumpy", "jumpy · pixels · servo steps", "jumpy · state · env steps"]
+    assert [row.base for row in rows] == ["no_subgoals", "jumpy", "jumpy", "jumpy"] and rows[1].paper == rows[2].paper
+    table = sensitivity_markdown(rows, 0.66)
+    header, _, line = table.splitlines()
+    assert header == "| planner | state · servo steps | pixels · servo steps | state · env steps | common tasks |"
+    # on the 3 tasks every setting played: 2, 1 and 0 successes
+    assert line.startswith("| jumpy | 66.7 % [") and "| 33.3 % [" in line and "| 0.0 % [0.0, 0.0] | 3 |" in line
+    assert sensitivity_markdown([rows[0], rows[1]], 0.66) == ""  # no planner in two settings
+    report.main([str(tmp_path), "--out", str(tmp_path / "out")])
+    assert "## Servo settings" in (tmp_path / "out" / "table2.md").read_text()
