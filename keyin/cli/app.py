@@ -9,6 +9,7 @@ import functools
 import json
 import logging
 import os
+import platform
 import sys
 import warnings
 from pathlib import Path
@@ -192,10 +193,33 @@ def finished_metrics(folder: Path) -> dict[str, Any] | None:
     return metrics
 
 
+def cpu_name() -> str:
+    """The CPU's model name (``/proc/cpuinfo`` on Linux), else what :mod:`platform` knows."""
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or platform.machine()
+
+
+def machine() -> dict[str, Any]:
+    """What a job's wall times were measured on: the CPU, its logical CPUs, torch's threads and
+    version, and the GPU where one is used."""
+    import torch
+
+    return {
+        "cpu": cpu_name(),
+        "cpus": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "torch": torch.__version__,
+        "gpu": torch.cuda.get_device_name(0) if torch.cuda.is_available() else None,
+    }
+
+
 def write_metrics(metrics: Mapping[str, Any], folder: Path) -> Path:
-    """Write ``metrics.json`` atomically, with the keyin version that wrote it, and print the metrics
-    as the last line of output."""
-    metrics = {**metrics, "keyin_version": __version__}
+    """Write ``metrics.json`` atomically, with the keyin version that wrote it and the machine it ran
+    on (:func:`machine`), and print the metrics as the last line of output."""
+    metrics = {**metrics, "keyin_version": __version__, "machine": machine()}
     path = Path(folder) / "metrics.json"
     atomic_write_text(path, json.dumps(dict(metrics), indent=1, sort_keys=True))
     print(json.dumps(dict(metrics), sort_keys=True))

@@ -25,6 +25,7 @@ from keyin.errors import KeyinError
 from keyin.eval.planning_report import (
     collect_planning,
     difference_markdown,
+    machines_markdown,
     outcome_markdown,
     planning_csv,
     planning_markdown,
@@ -135,7 +136,8 @@ def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> lis
             "rendered 64×64 image (`pixels`), its time budget counted in servo steps (2 environment steps) or in "
             "environment steps; success on the tasks each planner played in every setting.\n\n" + sensitivity
         )
-    text = header + planning_markdown(rows, threshold) + ("\n" + differences if differences else "") + sensitivity + outcomes
+    table = planning_markdown(rows, threshold) + "\n" + machines_markdown(rows)
+    text = header + table + ("\n" + differences if differences else "") + sensitivity + outcomes
     written = [out / "table2.md", out / "table2.csv"]
     atomic_write_text(written[0], text)
     atomic_write_text(written[1], planning_csv(rows, threshold))

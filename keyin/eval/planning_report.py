@@ -55,6 +55,7 @@ class PlanningRow:
         summary: :func:`keyin.eval.planning.planning_summary` of them.
         seed_success: each seed's success rate, in ``seeds`` order (its spread is the model seeds').
         seconds_per_task: the tasks' mean wall time in one worker process (one core each).
+        machines: each seed's :func:`machine_name` (what its wall times were measured on).
         paper: the paper's (error mean, error std, success %) or None.
         outcomes: how many of its tasks ended in each :data:`keyin.eval.planning.OUTCOMES` (servo
             episodes of a keyin-plan that records them), ``not recorded`` for the others.
@@ -71,6 +72,7 @@ class PlanningRow:
     summary: dict[str, float | int]
     seed_success: list[float]
     seconds_per_task: float
+    machines: dict[int, str]
     paper: tuple[float, float, float | None] | None
     outcomes: dict[str, int]
 
@@ -126,6 +128,16 @@ def servo_setting(job: dict[str, Any]) -> str:
 DEFAULT_SETTING = servo_setting({})
 
 
+def machine_name(job: dict[str, Any]) -> str:
+    """A job's machine as one phrase (``Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu``),
+    :data:`NOT_RECORDED` for a job whose metrics.json has none (keyin-plan before 0.2)."""
+    machine = job.get("machine")
+    if not machine:
+        return NOT_RECORDED
+    gpu = f", {machine['gpu']}" if machine.get("gpu") else ""
+    return f"{machine['cpu']}, {machine['cpus']} CPUs, torch {machine['torch']}{gpu}"
+
+
 def row_name(planner: str, setting: str) -> str:
     return planner if setting == DEFAULT_SETTING else f"{planner} · {setting}"
 
@@ -162,6 +174,7 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
                     for seed in sorted(groups[key])
                 ],
                 seconds_per_task=float(np.mean([task["seconds"] for task in tasks])),
+                machines={seed: machine_name(job) for seed, job in sorted(groups[key].items())},
                 paper=PAPER_TABLE2.get(planner),
                 outcomes=dict(Counter(task.get("outcome", NOT_RECORDED) for task in tasks)),
             )
@@ -240,6 +253,19 @@ def planning_markdown(rows: list[PlanningRow], threshold: float) -> str:
             f"{seed_spread(row)} | {paper_success} | {s['relative_error_mean']:.2f} | "
             f"{row.steps_mean:.1f} | {row.seconds_per_task:.1f} | {s['n_tasks']} | {' '.join(map(str, row.seeds))} |"
         )
+    return "\n".join(lines) + "\n"
+
+
+def machines_markdown(rows: list[PlanningRow]) -> str:
+    """Where each row's ``s / task`` was measured: one line per machine, naming its rows and seeds."""
+    seeds_on: dict[str, dict[str, list[int]]] = {}
+    for row in rows:
+        for seed, name in row.machines.items():
+            seeds_on.setdefault(name, {}).setdefault(row.planner, []).append(seed)
+    lines = [
+        f"- s / task on {name}: " + ", ".join(f"{planner} (seeds {' '.join(map(str, seeds))})" for planner, seeds in by_row.items())
+        for name, by_row in sorted(seeds_on.items(), key=lambda item: (item[0] == NOT_RECORDED, item[0]))
+    ]
     return "\n".join(lines) + "\n"
 
 

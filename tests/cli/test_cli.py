@@ -1,8 +1,10 @@
 """Every console script end to end (tiny), and bad inputs giving one clear error line."""
 
 import json
+import os
 
 import pytest
+import torch
 
 from tests.cli.runner import last_json, run, run_process
 
@@ -33,6 +35,10 @@ def test_eval_baseline_prints_metrics_and_writes_them(brownian_test_set, model):
         assert 0.0 <= metrics[key] <= (1.0 if key != "n_sequences" else 40)
     assert metrics["n_sequences"] == 40 and metrics["method"] == model
     assert metrics["dataset"] == "brownian"
+    machine = metrics["machine"]  # what the job's wall times were measured on
+    assert machine["cpus"] == os.cpu_count() and machine["cpu"] and machine["torch"] == torch.__version__
+    assert machine["gpu"] == (torch.cuda.get_device_name(0) if torch.cuda.is_available() else None)
+    assert machine["torch_threads"] >= 1
     saved = list((brownian_test_set / "runs" / f"eval_{model}_brownian").glob("*/*/metrics.json"))
     assert json.loads(saved[-1].read_text()) == metrics
     assert (saved[-1].parent / "keyframes.png").is_file() and (saved[-1].parent / "keyframes.gif").is_file()

@@ -10,6 +10,7 @@ from keyin.eval.planning import bootstrap_interval, planning_summary, success_cu
 from keyin.eval.planning_report import (
     collect_planning,
     difference_markdown,
+    machines_markdown,
     outcome_markdown,
     paired_success_difference,
     planning_csv,
@@ -20,7 +21,7 @@ from keyin.eval.planning_report import (
 )
 
 
-def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, **setting):
+def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, machine=None, **setting):
     job = root / f"{planner}_seed{seed}{''.join(f'_{value}' for value in setting.values())}"
     job.mkdir(parents=True)
     records = [dict(task=i, planner=planner, seed=seed, final_error=e, initial_distance=1.25, steps=10, subgoals=1,
@@ -30,6 +31,8 @@ def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outco
     (job / "tasks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in reversed(records)) + extra_lines)
     metrics = dict(planning_summary(np.array(errors), np.full(len(errors), 1.25), threshold), planner=planner,
                    seed=seed, dataset="pushing", success_threshold=threshold, **setting)
+    if machine is not None:
+        metrics["machine"] = machine
     (job / "metrics.json").write_text(json.dumps(metrics))
 
 
@@ -73,6 +76,23 @@ def test_the_spread_over_seeds_is_the_sample_std_of_each_seeds_success_rate(tmp_
     (row,) = summarise_planning(collect_planning(tmp_path), 0.66)
     assert row.seed_success == [0.75, 0.25, 0.5] and row.summary["success_rate"] == 0.5
     assert "| 50.0 % [" in planning_markdown([row], 0.66) and "| 50.0 ± 25.0 % |" in planning_markdown([row], 0.66)
+
+
+def test_each_rows_wall_time_names_the_machine_of_each_seed(tmp_path):
+    xeon = {"cpu": "Intel(R) Xeon(R) Processor", "cpus": 2, "torch_threads": 1, "torch": "2.13.0+cpu", "gpu": None}
+    epyc = dict(xeon, cpu="AMD EPYC 7B13")
+    write_job(tmp_path, "jumpy", 0, [0.1], machine=epyc)
+    write_job(tmp_path, "jumpy", 1, [0.1], machine=xeon)
+    write_job(tmp_path, "jumpy", 2, [0.1], machine=xeon)
+    write_job(tmp_path, "random", 0, [1.0])  # keyin-plan before the machine was recorded
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert rows[1].machines == {0: "AMD EPYC 7B13, 2 CPUs, torch 2.13.0+cpu", 1: "Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu",
+                                2: "Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu"}
+    assert machines_markdown(rows).splitlines() == [
+        "- s / task on AMD EPYC 7B13, 2 CPUs, torch 2.13.0+cpu: jumpy (seeds 0)",
+        "- s / task on Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu: jumpy (seeds 1 2)",
+        "- s / task on not recorded: random (seeds 0)",
+    ]
 
 
 def test_the_success_curves_run_from_zero_past_every_error(sweep):
