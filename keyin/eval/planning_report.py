@@ -263,7 +263,8 @@ def machines_markdown(rows: list[PlanningRow]) -> str:
         for seed, name in row.machines.items():
             seeds_on.setdefault(name, {}).setdefault(row.planner, []).append(seed)
     lines = [
-        f"- s / task on {name}: " + ", ".join(f"{planner} (seeds {' '.join(map(str, seeds))})" for planner, seeds in by_row.items())
+        ("- s / task of jobs that did not record their machine: " if name == NOT_RECORDED else f"- s / task on {name}: ")
+        + ", ".join(f"{planner} (seeds {' '.join(map(str, seeds))})" for planner, seeds in by_row.items())
         for name, by_row in sorted(seeds_on.items(), key=lambda item: (item[0] == NOT_RECORDED, item[0]))
     ]
     return "\n".join(lines) + "\n"

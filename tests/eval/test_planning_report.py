@@ -91,7 +91,7 @@ def test_each_rows_wall_time_names_the_machine_of_each_seed(tmp_path):
     assert machines_markdown(rows).splitlines() == [
         "- s / task on AMD EPYC 7B13, 2 CPUs, torch 2.13.0+cpu: jumpy (seeds 0)",
         "- s / task on Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu: jumpy (seeds 1 2)",
-        "- s / task on not recorded: random (seeds 0)",
+        "- s / task of jobs that did not record their machine: random (seeds 0)",
     ]
 
 
