@@ -15,7 +15,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from keyin import __version__
-from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
+from keyin.cli.app import keyin_main, machine, run_dir, user_errors, write_metrics
 from keyin.cli.checks import require_int_at_least, require_positive_int, require_seed
 from keyin.cli.eval import eval_clips, eval_files
 from keyin.data.clips import ShardClips
@@ -124,7 +124,7 @@ def figures(cfg: DictConfig) -> dict[str, Any]:
     torch.manual_seed(cfg.seed)  # the prior samples
     numbers = DRAW[cfg.figure](cfg, model, trained, clips, path)
     numbers = {"figure": cfg.figure, "png": str(path), "ckpt": str(cfg.ckpt), "model": trained["model"]["name"],
-               "dataset": dataset.name, "seed": cfg.seed, **numbers, "keyin_version": __version__}
+               "dataset": dataset.name, "seed": cfg.seed, **numbers, "keyin_version": __version__, "machine": machine()}
     atomic_write_text(path.with_suffix(".json"), json.dumps(numbers, indent=1, sort_keys=True))
     write_metrics(numbers, run_dir())
     return numbers
