@@ -130,7 +130,7 @@ DEFAULT_SETTING = servo_setting({})
 
 def machine_name(job: dict[str, Any]) -> str:
     """A job's machine as one phrase (``Intel(R) Xeon(R) Processor, 2 CPUs, torch 2.13.0+cpu``),
-    :data:`NOT_RECORDED` for a job whose metrics.json has none (keyin-plan before 0.2)."""
+    :data:`NOT_RECORDED` for a job whose metrics.json has none (written before keyin recorded it)."""
     machine = job.get("machine")
     if not machine:
         return NOT_RECORDED
