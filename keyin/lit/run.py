@@ -52,7 +52,8 @@ def fit_stage(
     config: dict[str, Any],
     compile_networks: bool = False,
 ) -> Path:
-    """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present.
+    """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present;
+    a stage that has reached ``max_steps`` already is only loaded (its file keeps its bytes and hash).
 
     ``compile_networks`` compiles each of the module's networks in place with ``torch.compile``
     (``nn.Module.compile``: parameter names, so checkpoints, stay the same).
@@ -81,7 +82,12 @@ def fit_stage(
     remove_stale_temporaries(folder)  # a checkpoint being written when the last run was killed
     resume = last if last.is_file() else None
     if resume is not None:  # one clear error for a foreign, corrupt, unsafe or other model's file
-        check_same_model(load_checkpoint(resume, module.stage), resume, module, config)
+        saved = load_checkpoint(resume, module.stage)
+        check_same_model(saved, resume, module, config)
+        if 0 <= max_steps <= saved.get("global_step", 0):  # finished: its weights, and its file left as it is
+            log.info("%s: %s has its %d steps; loaded, not trained again", module.stage, resume, max_steps)
+            module.load_state_dict(saved["state_dict"])
+            return last
     with warnings.catch_warnings():
         if module.stage == "keyframes":  # the frozen stage 1 is in eval mode by design: said once, in our words
             warnings.filterwarnings("ignore", message=r"Found \d+ module\(s\) in eval mode")
