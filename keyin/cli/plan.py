@@ -119,6 +119,8 @@ def plan(cfg: DictConfig) -> dict:
         servo_action_repeat=servo.action_repeat,
         dataset=cfg.dataset.name,
         seed=cfg.seed,
+        # the seed of the model planned with, where it can differ from the planning seed (keyin, jumpy)
+        **({"model_seed": cfg.planner.model_seed} if "model_seed" in cfg.planner else {}),
         success_threshold=threshold,
         steps_mean=float(np.mean([r["steps"] for r in records])),
         seconds_per_task=float(np.mean([r["seconds"] for r in records])),

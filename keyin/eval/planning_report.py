@@ -50,10 +50,13 @@ class PlanningRow:
         planner: the row's name: ``base``, followed by its ``setting`` unless the default.
         base: the planner's name (``metrics.json``'s ``planner``).
         setting: :func:`servo_setting` of its jobs.
+        model_seed: the one model seed its jobs planned with under their own planning seeds, or
+            None where each seed planned with its own model (:func:`fixed_model_seed`).
         tasks: (seed, task index) of each of its n tasks, in the order of ``errors``.
         errors, initial: (n,) final and initial shortest-path distances of its tasks.
         summary: :func:`keyin.eval.planning.planning_summary` of them.
-        seed_success: each seed's success rate, in ``seeds`` order (its spread is the model seeds').
+        seed_success: each seed's success rate, in ``seeds`` order (its spread is the model seeds',
+            with the CEM's; the planning seeds' alone where ``model_seed`` is set).
         seconds_per_task: the tasks' mean wall time in one worker process (one core each).
         machines: each seed's :func:`machine_name` (what its wall times were measured on).
         paper: the paper's (error mean, error std, success %) or None.
@@ -64,6 +67,7 @@ class PlanningRow:
     planner: str
     base: str
     setting: str
+    model_seed: int | None
     seeds: list[int]
     tasks: list[tuple[int, int]]
     errors: np.ndarray
@@ -138,31 +142,49 @@ def machine_name(job: dict[str, Any]) -> str:
     return f"{machine['cpu']}, {machine['cpus']} CPUs, torch {machine['torch']}{gpu}"
 
 
-def row_name(planner: str, setting: str) -> str:
-    return planner if setting == DEFAULT_SETTING else f"{planner} · {setting}"
+def fixed_model_seed(job: dict[str, Any]) -> int | None:
+    """The model seed of a job that planned with another model seed than its planning seed (one
+    model under several planning seeds: the CEM's share of the spread over seeds), else None."""
+    model_seed = job.get("model_seed")
+    return None if model_seed is None or model_seed == job["seed"] else int(model_seed)
+
+
+def row_name(planner: str, setting: str, model_seed: int | None = None) -> str:
+    name = planner if setting == DEFAULT_SETTING else f"{planner} · {setting}"
+    return name if model_seed is None else f"{name} · model seed {model_seed}"
+
+
+def row_order(key: tuple[str, str, int | None]) -> tuple:
+    """Table order of a (planner, setting, model seed) row: the default setting first, then the
+    other servo settings, then one model under other planning seeds; within each, :func:`planner_sort_key`."""
+    planner, setting, model_seed = key
+    return (model_seed is not None, setting != DEFAULT_SETTING, setting, *planner_sort_key(planner), model_seed or 0)
 
 
 def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[PlanningRow]:
-    """One row per planner and servo setting, its tasks of every seed pooled.
+    """One row per planner and servo setting, its tasks of every seed pooled; the jobs that planned
+    one model under other planning seeds (:func:`fixed_model_seed`) are a row of their own.
 
     Raises:
         ValueError: if a (planner, setting, seed) appears twice (two sweeps under one root).
     """
-    groups = group_by_seed(
-        jobs, lambda job: (job["planner"], servo_setting(job)), lambda job: f"planner {row_name(job['planner'], servo_setting(job))}"
-    )
+    def key_of(job: dict[str, Any]) -> tuple[str, str, int | None]:
+        return job["planner"], servo_setting(job), fixed_model_seed(job)
+
+    groups = group_by_seed(jobs, key_of, lambda job: f"planner {row_name(*key_of(job))}")
     rows = []
-    for key in sorted(groups, key=lambda key: (key[1] != DEFAULT_SETTING, key[1], *planner_sort_key(key[0]))):
-        planner, setting = key
+    for key in sorted(groups, key=row_order):
+        planner, setting, model_seed = key
         tasks = [task for job in groups[key].values() for task in job["tasks"]]
         keys = [(seed, task["task"]) for seed, job in groups[key].items() for task in job["tasks"]]
         errors = np.array([task["final_error"] for task in tasks], dtype=np.float64)
         initial = np.array([task["initial_distance"] for task in tasks], dtype=np.float64)
         rows.append(
             PlanningRow(
-                planner=row_name(planner, setting),
+                planner=row_name(planner, setting, model_seed),
                 base=planner,
                 setting=setting,
+                model_seed=model_seed,
                 seeds=sorted(groups[key]),
                 tasks=keys,
                 errors=errors,
@@ -275,7 +297,8 @@ def sensitivity_markdown(rows: list[PlanningRow], threshold: float) -> str:
     bootstrap interval, on the tasks (seed, task) it played in all of them; empty if none was."""
     settings: dict[str, list[PlanningRow]] = {}
     for row in rows:
-        settings.setdefault(row.base, []).append(row)
+        if row.model_seed is None:
+            settings.setdefault(row.base, []).append(row)
     settings = {base: group for base, group in settings.items() if len(group) > 1}
     if not settings:
         return ""

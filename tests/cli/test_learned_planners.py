@@ -34,9 +34,11 @@ def root(tmp_path_factory):
 
 
 def test_keyin_plans_its_keyframes_as_subgoals(root):
-    result = run("plan", "planner=keyin", f"planner.checkpoint={KEYFRAMES}", "hydra.run.dir=keyin", *TINY, cwd=root)
+    result = run("plan", "planner=keyin", f"planner.checkpoint={KEYFRAMES}", "hydra.run.dir=keyin", "seed=1",
+                 "planner.model_seed=0", *TINY, cwd=root)
     assert result.returncode == 0, result.stderr[-3000:]
-    assert last_json(result.stdout)["n_tasks"] == 1
+    metrics = last_json(result.stdout)
+    assert metrics["n_tasks"] == 1 and (metrics["seed"], metrics["model_seed"]) == (1, 0)  # keyin-report's row
     (record,) = [json.loads(line) for line in (root / "keyin" / "tasks.jsonl").read_text().splitlines()]
     assert record["planner"] == "keyin_plus" and record["steps"] == 3 and record["subgoals"] == 6 + 1  # K^1..K^6, goal
     assert 0 <= record["plan_samples_without_puck"] <= 8 and 0 <= record["plan_cost_px"] <= 64 * 2**0.5

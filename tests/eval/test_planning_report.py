@@ -175,3 +175,18 @@ def test_a_servo_setting_is_its_own_row_and_the_sensitivity_table_pairs_the_task
     assert sensitivity_markdown([rows[0], rows[1]], 0.66) == ""  # no planner in two settings
     report.main([str(tmp_path), "--out", str(tmp_path / "out")])
     assert "## Servo settings" in (tmp_path / "out" / "table2.md").read_text()
+
+
+def test_one_model_under_other_planning_seeds_is_its_own_row_and_not_a_servo_setting(tmp_path):
+    write_job(tmp_path, "keyin_paper", 0, [0.1, 0.1, 0.1, 0.1], model_seed=0)  # planned with its own model
+    write_job(tmp_path, "keyin_paper", 1, [0.1, 1.0, 1.0, 0.1], model_seed=1)
+    write_job(tmp_path / "noise", "keyin_paper", 1, [0.1, 0.1, 1.0, 0.1], model_seed=0)  # model 0, planning seed 1
+    write_job(tmp_path / "noise", "keyin_paper", 2, [1.0, 0.1, 0.1, 0.1], model_seed=0)
+    write_job(tmp_path, "keyin_paper", 0, [0.1, 1.0], servo_observe="pixels", servo_action_repeat=2, model_seed=0)
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert [row.planner for row in rows] == [
+        "keyin_paper", "keyin_paper · pixels · servo steps", "keyin_paper · model seed 0"]
+    assert [row.model_seed for row in rows] == [None, None, 0]
+    assert rows[2].seeds == [1, 2] and rows[2].seed_success == [0.75, 0.75] and rows[0].seed_success == [1.0, 0.5]
+    header, _, line = sensitivity_markdown(rows, 0.66).splitlines()
+    assert "model seed" not in header and line.endswith("| 2 |")  # seed 0's tasks 0 and 1 in both servo settings
