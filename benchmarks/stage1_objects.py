@@ -1,13 +1,13 @@
-"""Does a pushing stage 1 draw the puck and the pusher where they are? Centroid errors by colour.
+"""Does a pushing frame model draw the puck and the pusher where they are? Object scores by colour.
 
-    python benchmarks/stage1_objects.py <stage-1 or stage-2 checkpoint> --split val --clips 200
+    python benchmarks/stage1_objects.py <frames, stage-1 or stage-2 checkpoint> --split val --clips 200
 
 The stage-1 gate of issue 25 in numbers: on validation clips, the frames the checkpoint's decoder
-draws (a) auto-encoded and (b) interpolated between the true keyframes (z = 0, every labelled
-segment of at most S frames), with each object found by its flat colour
-(:func:`keyin.envs.segmentation.puck_centroid` with the scene's colours). Per object: how often it
-is visible in the drawing where it is visible in the truth, and the mean distance in pixels between
-the two centroids where both are. Prints Markdown.
+draws (a) auto-encoded and, where it has an interpolator, (b) interpolated between the true
+keyframes (z = 0, every labelled segment of at most S frames), each object found by its flat colour
+(:mod:`keyin.eval.placement`). Per object: how often the drawing shows it where the truth does, the
+mean and median distance in pixels between the two centroids where both do, the share of frames
+drawn within 2 px, and the IoU of the two colour masks. Prints Markdown.
 """
 
 from __future__ import annotations
@@ -16,35 +16,22 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.data.segments import segment_frames, valid_frames
-from keyin.envs.pushing import COLOURS
-from keyin.envs.segmentation import puck_centroid
-from keyin.lit.checkpoints import load_checkpoint, load_trained_module
+from keyin.eval.placement import placement_scores
+from keyin.lit.checkpoints import STAGE_KEY, load_checkpoint, load_trained_module
 from keyin.models.interpolator import interpolate_segments
 
-OBJECTS = ("puck", "pusher")
 
-
-def object_errors(drawn: np.ndarray, truth: np.ndarray) -> dict[str, tuple[float, float]]:
-    """Per object, (share of truth-visible frames where the drawing shows it, mean centroid error in px).
-
-    Args:
-        drawn, truth: (F, H, W, 3) float in [0, 1].
-    """
-    errors = {}
-    for name in OBJECTS:
-        drawn_at, _ = puck_centroid(drawn, COLOURS[name])
-        true_at, _ = puck_centroid(truth, COLOURS[name])
-        seen = ~np.isnan(true_at[:, 0])
-        both = seen & ~np.isnan(drawn_at[:, 0])
-        distance = np.linalg.norm(drawn_at[both] - true_at[both], axis=-1)
-        errors[name] = (both.sum() / max(seen.sum(), 1), float(distance.mean()) if both.any() else float("nan"))
-    return errors
+def frame_model(module: torch.nn.Module, stage: str) -> tuple[torch.nn.Module, torch.nn.Module, torch.nn.Module | None]:
+    """The encoder, decoder and (None for a frame autoencoder) interpolator of a trained module."""
+    if stage == "frames":
+        return module.network.encoder, module.network.decoder, None
+    networks = module.model if stage == "keyframes" else module
+    return networks.encoder, networks.decoder, networks.interpolator
 
 
 def labelled_segments(keyframes: torch.Tensor, lengths: torch.Tensor, n_cond: int, max_offset: int) -> tuple[torch.Tensor, ...]:
@@ -68,33 +55,38 @@ def main() -> None:
     parser.add_argument("--clips", type=int, default=200)
     args = parser.parse_args()
     began = time.perf_counter()
-    module, config = load_trained_module(args.ckpt, "interpolator")
-    hp = module.hparams
-    step = load_checkpoint(args.ckpt, "interpolator")["global_step"]
-    clips = ShardClips(split_files(Path(args.data_dir) / config["dataset"]["name"], args.split),
-                       (hp.image_size, hp.image_size, hp.channels), hp.n_cond, hp.n_future)
+    checkpoint = load_checkpoint(args.ckpt)
+    stage = checkpoint[STAGE_KEY]
+    module, config = load_trained_module(args.ckpt, stage)
+    encoder, decoder, interpolator = frame_model(module, stage)
+    dataset = config["dataset"]
+    n_cond, n_future = dataset["n_cond"], dataset["n_future"]
+    clips = ShardClips(split_files(Path(args.data_dir) / dataset["name"], args.split),
+                       (dataset["image_size"], dataset["image_size"], dataset["channels"]), n_cond, n_future)
     batch = [clips[i] for i in range(min(args.clips, len(clips)))]
     frames = torch.stack([item["frames"] for item in batch])  # (B, L, C, H, W)
-    lengths = hp.n_cond + torch.stack([item["future_length"] for item in batch])
+    lengths = n_cond + torch.stack([item["future_length"] for item in batch])
     keyframes = torch.stack([item["keyframes"] for item in batch])  # (B, N)
-    embeddings = module.encoder(frames)  # (B, L, E)
+    embeddings = encoder(frames)  # (B, L, E)
     valid = valid_frames(lengths, frames.shape[1])
-    auto = torch.sigmoid(module.decoder(embeddings[valid])).permute(0, 2, 3, 1).numpy()
-    truth = frames[valid].permute(0, 2, 3, 1).numpy()
-    segments = labelled_segments(keyframes, lengths, hp.n_cond, hp.max_offset)
-    predicted, inside, _ = interpolate_segments(module.interpolator, None, embeddings, *segments, "mean")
-    clip, start, offset = segments
-    positions, _ = segment_frames(start, offset, hp.max_offset)
-    inter = torch.sigmoid(module.decoder(predicted[inside])).permute(0, 2, 3, 1).numpy()
-    inter_truth = frames[clip[:, None].expand_as(positions)[inside], positions[inside]].permute(0, 2, 3, 1).numpy()
-    print(f"## Where stage 1 draws the objects: {args.ckpt} (step {step})\n")
+    drawings = {"auto-encoded": (torch.sigmoid(decoder(embeddings[valid])), frames[valid])}
+    if interpolator is not None:
+        segments = labelled_segments(keyframes, lengths, n_cond, interpolator.max_offset)
+        predicted, inside, _ = interpolate_segments(interpolator, None, embeddings, *segments, "mean")
+        clip, start, offset = segments
+        positions, _ = segment_frames(start, offset, interpolator.max_offset)
+        truth = frames[clip[:, None].expand_as(positions)[inside], positions[inside]]
+        drawings["interpolated"] = (torch.sigmoid(decoder(predicted[inside])), truth)
+    print(f"## Where the frame model draws the objects: {args.ckpt} ({stage}, step {checkpoint['global_step']})\n")
     print(f"- command: `python benchmarks/stage1_objects.py {args.ckpt} --split {args.split} --clips {len(batch)}`")
-    print(f"- {len(truth)} auto-encoded frames, {len(inter)} frames interpolated between the true keyframes (z = 0)\n")
-    print("| frames | object | visible where the truth shows it | centroid error (px, where both visible) |")
-    print("|---|---|---|---|")
-    for name, (drawn, target) in {"auto-encoded": (auto, truth), "interpolated": (inter, inter_truth)}.items():
-        for obj, (seen, error) in object_errors(drawn, target).items():
-            print(f"| {name} | {obj} | {100 * seen:.1f} % | {error:.2f} |")
+    print(f"- {', '.join(f'{len(drawn)} {name} frames' for name, (drawn, _) in drawings.items())}"
+          f"{' (between the true keyframes, z = 0)' if interpolator is not None else ''}\n")
+    print("| frames | object | drawn where the truth shows it | centroid error (px, where both) | median | within 2 px | mask IoU |")
+    print("|---|---|---|---|---|---|---|")
+    for name, (drawn, truth) in drawings.items():
+        for obj, score in placement_scores(drawn, truth).items():
+            print(f"| {name} | {obj} | {100 * score.drawn:.1f} % | {score.centroid_error_px:.2f} | "
+                  f"{score.median_error_px:.2f} | {100 * score.within_2px:.1f} % | {score.iou:.3f} |")
     print(f"\n{time.perf_counter() - began:.0f} s, torch {torch.__version__}")
 
 

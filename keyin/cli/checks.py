@@ -63,8 +63,8 @@ STAGES = ("both", "interpolator", "keyframes")
 SCALE_KEYS = (
     "embed_dim", "conv_width", "lstm_hidden", "lstm_layers", "mlp_hidden", "inter_latent", "surprise_latent",
     "key_latent", "batch_size", "stage1_batch_size", "ae_frames", "lr_stage1", "lr_surprise", "lr_stage2", "lr_tap",
-    "stage1_steps", "surprise_steps", "stage2_steps", "tap_steps", "val_every", "checkpoint_every", "val_clips",
-    "eval_clips", "teacher_clips",
+    "lr_frames", "stage1_steps", "surprise_steps", "stage2_steps", "tap_steps", "frames_steps", "val_every",
+    "checkpoint_every", "val_clips", "eval_clips", "teacher_clips",
 )
 # Where the method choices that keyin 0.1 kept under scale. (and loss.) live now.
 MOVED_KEYS = {
@@ -89,8 +89,8 @@ def moved_key_message(key: str) -> str | None:
         f"values; docs/architecture.md)"
     )
 SCALE_COUNTS = (
-    "batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "tap_steps", "val_every",
-    "checkpoint_every", "val_clips", "eval_clips",
+    "batch_size", "stage1_batch_size", "stage1_steps", "stage2_steps", "surprise_steps", "tap_steps", "frames_steps",
+    "val_every", "checkpoint_every", "val_clips", "eval_clips",
 )
 
 

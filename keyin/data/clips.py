@@ -26,19 +26,20 @@ def clip_item(arrays: dict[str, np.ndarray], n_cond: int, n_future: int) -> dict
     clip_length = n_cond + n_future
     frames = torch.from_numpy(np.ascontiguousarray(arrays["frames"][:clip_length]))
     frames = frames.permute(0, 3, 1, 2).float().div_(255.0)
-    future_length = int(min(int(arrays["length"]) - n_cond, n_future))
-    keyframes = arrays.get("keyframes")
+    return {"frames": frames, **future_labels(int(arrays["length"]), arrays.get("keyframes"), n_cond, n_future)}
+
+
+def future_labels(length: int, keyframes: np.ndarray | None, n_cond: int, n_future: int) -> dict[str, torch.Tensor]:
+    """A clip's ``future_length`` and future ``keyframes`` (see the module docstring) from its stored
+    valid length and keyframes (L,) on the clip's own axis (None: unknown)."""
+    future_length = int(min(length - n_cond, n_future))
     future_keys = (
         torch.zeros(n_future, dtype=torch.bool)
         if keyframes is None
-        else torch.from_numpy(np.asarray(keyframes[n_cond:clip_length], dtype=bool))
+        else torch.from_numpy(np.array(keyframes[n_cond : n_cond + n_future], dtype=bool))  # a copy
     )
     future_keys[max(future_length, 0) :] = False
-    return {
-        "frames": frames,
-        "future_length": torch.tensor(future_length, dtype=torch.int64),
-        "keyframes": future_keys,
-    }
+    return {"future_length": torch.tensor(future_length, dtype=torch.int64), "keyframes": future_keys}
 
 
 class GeneratedClips(Dataset):

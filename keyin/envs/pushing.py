@@ -30,7 +30,7 @@ from dm_control.utils import containers
 
 from keyin.envs.geometry import apply_homography, plane_homography, shortest_path_length
 from keyin.envs.layout import Layout, LayoutSampler
-from keyin.envs.segmentation import PUCK_RGB
+from keyin.envs.segmentation import PUCK_RGB, PUSHER_RGB
 
 SUITE = containers.TaggedTasks()
 DEFAULT_TIME_LIMIT = 12.0  # s: 120 control steps = 60 saved frames = the servo's T_max (REFERENCE §7.2)
@@ -38,7 +38,7 @@ CAMERA = "top"
 REWARD_MARGIN = 1.5  # path length beyond the goal tolerance at which the reward reaches 0
 # Flat RGB colours of the geoms (ambient-only lighting renders them unchanged).
 COLOURS = {"table": (0.85, 0.85, 0.85), "border": (0.3, 0.3, 0.3), "wall": (0.15, 0.35, 0.85),
-           "pusher": (0.95, 0.55, 0.1), "puck": PUCK_RGB}
+           "pusher": PUSHER_RGB, "puck": PUCK_RGB}
 BOX_HALF_HEIGHT = 0.05  # border and wall boxes stand on the table: tops at 0.1
 
 

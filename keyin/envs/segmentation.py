@@ -15,6 +15,7 @@ import numpy as np
 
 # The rendered puck colour under the scene's flat, ambient-only lighting (keyin.envs.pushing).
 PUCK_RGB = (0.55, 0.15, 0.75)
+PUSHER_RGB = (0.95, 0.55, 0.1)
 DEFAULT_TAU = 0.25
 # Total weight below which a frame is said to show no puck.
 MIN_MASS = 0.5

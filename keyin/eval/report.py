@@ -72,21 +72,21 @@ def is_planning(metrics: dict[str, Any]) -> bool:
     return "planner" in metrics
 
 
-def is_subgoal_predictor(metrics: dict[str, Any]) -> bool:
-    """A job that predicts subgoal images and finds no keyframes (TAP): no row of Table 1."""
-    return "f1" not in metrics and "argmin_last" in metrics
+def finds_no_keyframes(metrics: dict[str, Any]) -> bool:
+    """A job that trains no keyframe model (TAP's subgoal predictor, a frame autoencoder): no row of Table 1."""
+    return "f1" not in metrics and ("argmin_last" in metrics or metrics.get("method") == "frame_autoencoder")
 
 
 def collect_metrics(root: Roots) -> list[dict[str, Any]]:
     """Every keyframe job's metrics under ``root`` (one sweep folder or several, merged by method and
-    seed), one record per method and variant (planning and subgoal-predictor jobs are left out).
+    seed), one record per method and variant (planning jobs and those of :func:`finds_no_keyframes` are left out).
 
     Raises:
         ValueError: if no metrics.json is found, or one lacks method/dataset/f1.
     """
     records = []
     for folder, metrics in read_metrics(root):
-        if is_planning(metrics) or is_subgoal_predictor(metrics):
+        if is_planning(metrics) or finds_no_keyframes(metrics):
             continue
         missing = [key for key in ("method", "dataset", "f1") if key not in metrics]
         if missing:

@@ -57,6 +57,7 @@ def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
 STAGE_CHECKPOINTS = {
     "interpolator": "the stage-1 checkpoint (checkpoints/interpolator/last.ckpt)",
     "keyframes": "a stage-2 checkpoint (checkpoints/keyframes/last.ckpt)",
+    "frames": "a frame autoencoder's checkpoint (keyin-train model=frame_autoencoder: checkpoints/frames/last.ckpt)",
 }
 
 
@@ -65,7 +66,7 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
 
     Args:
         path: a checkpoint file, or ``pretrained:<name>`` for one shipped with keyin (:mod:`keyin.pretrained`).
-        stage: the stage to insist on ("interpolator", "keyframes", "surprise", "tap"); None accepts any.
+        stage: the stage to insist on ("interpolator", "keyframes", "surprise", "tap", "frames"); None accepts any.
     Raises:
         CheckpointError: missing file, unsafe or foreign content, or another stage.
     """
@@ -136,16 +137,19 @@ def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tu
     ``model.name`` in this version's names (:func:`saved_model_name`).
 
     Args:
-        stage: "interpolator", "keyframes", or None for whichever the checkpoint holds.
+        stage: "interpolator", "keyframes", "surprise", "tap", "frames", or None for whichever the
+            checkpoint holds.
     """
     # The modules import this file's callback, so they are imported here.
+    from keyin.lit.frame_autoencoder import FrameAutoencoderModule
     from keyin.lit.interpolator import InterpolatorModule
     from keyin.lit.keyframes import KeyframeModule
     from keyin.lit.surprise import SurpriseModule
     from keyin.lit.tap import TAPModule
 
     checkpoint = load_checkpoint(path, stage)
-    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule, "tap": TAPModule}
+    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule, "tap": TAPModule,
+              "frames": FrameAutoencoderModule}
     module_class = stages[checkpoint[STAGE_KEY]]
     module = module_class(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])

@@ -21,6 +21,7 @@ log = logging.getLogger(__name__)
 
 LEARNING_RATES = {
     "interpolator": "scale.lr_stage1", "keyframes": "scale.lr_stage2", "surprise": "scale.lr_surprise", "tap": "scale.lr_tap",
+    "frames": "scale.lr_frames",
 }
 
 

@@ -2,6 +2,7 @@
 
 from keyin.models.attention import attention_posterior
 from keyin.models.conv import ConvDecoder, ConvEncoder
+from keyin.models.frame_autoencoder import FrameAutoencoder
 from keyin.models.interpolator import Interpolator, InterpolatorPosterior
 from keyin.models.keyframe_predictor import KeyframeOutput, KeyframePredictor
 from keyin.models.keyin import KEYIN
@@ -12,6 +13,7 @@ from keyin.models.tap import TAPNetwork
 __all__ = [
     "ConvDecoder",
     "ConvEncoder",
+    "FrameAutoencoder",
     "Interpolator",
     "KEYIN",
     "InterpolatorPosterior",

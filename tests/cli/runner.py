@@ -70,3 +70,13 @@ def error_line(result: Result) -> str:
     assert result.returncode == 2, result.stderr[-2000:]
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr[-2000:]
     return lines[0]
+
+
+def train_on_few_pushing_demos(root: Path, *train: str) -> dict:
+    """Generate 4 pushing clips per split in ``root``, run ``keyin-train train...`` there and return
+    its metrics (the one-stage models' end-to-end fixtures)."""
+    generated = run("generate", "dataset=pushing", "splits={train: 4, val: 4, test: 4}", "progress=false", cwd=root)
+    assert generated.returncode == 0, generated.stderr
+    result = run("train", *train, cwd=root)
+    assert result.returncode == 0, result.stderr[-3000:]
+    return last_json(result.stdout)

@@ -9,20 +9,16 @@ import torch
 
 from keyin.lit.checkpoints import load_trained_module
 from keyin.lit.tap import TAPModule
-from tests.cli.runner import last_json, run
+from tests.cli.runner import last_json, run, train_on_few_pushing_demos
 
-TRAIN = ("train", "model=tap", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0",
+TRAIN = ("model=tap", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0",
          "trainer.enable_progress_bar=false", "hydra.run.dir=run")
 
 
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
     root = tmp_path_factory.mktemp("tap")
-    generated = run("generate", "dataset=pushing", "splits={train: 4, val: 4, test: 4}", "progress=false", cwd=root)
-    assert generated.returncode == 0, generated.stderr
-    result = run(*TRAIN, cwd=root)
-    assert result.returncode == 0, result.stderr[-3000:]
-    return root, last_json(result.stdout)
+    return root, train_on_few_pushing_demos(root, *TRAIN)
 
 
 def test_training_writes_tap_metrics_and_its_subgoal_grid(trained):
@@ -44,6 +40,6 @@ def test_the_checkpoint_loads_as_a_subgoal_predictor(trained):
 
 def test_a_finished_run_is_skipped_by_a_resumable_sweep(trained):
     root, metrics = trained
-    result = run(*TRAIN, "skip_finished=true", cwd=root)
+    result = run("train", *TRAIN, "skip_finished=true", cwd=root)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "finished earlier; skipped" in result.stdout and last_json(result.stdout) == metrics

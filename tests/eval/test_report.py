@@ -31,6 +31,9 @@ def sweep(tmp_path):
     tap = tmp_path / "tap_seed0"  # a subgoal predictor beside the sweep has no keyframe F1
     tap.mkdir()
     (tap / "metrics.json").write_text(json.dumps(dict(method="tap", dataset="pushing", seed=0, argmin_last=0.4)))
+    frames = tmp_path / "frame_autoencoder_seed0"  # nor does a frame model
+    frames.mkdir()
+    (frames / "metrics.json").write_text(json.dumps(dict(method="frame_autoencoder", dataset="pushing", seed=0, bce_per_frame=9.0)))
     return tmp_path
 
 

@@ -1,0 +1,144 @@
+"""The frame autoencoder (issue 25): one stage on single frames, the frame model that stage 1 and
+stage 2 can share frozen, with the dataset's embeddings cached once (keyin.data.embeddings).
+
+Each training step draws ``frames_per_clip`` valid frames of every clip of the batch and scores
+their reconstruction with the image likelihood of KEYIN's stage 1 (changed pixels weighted,
+keyin/losses/image.py, against the clip's first frame). Validation and test score every valid frame:
+the BCE per frame and, on RGB frames, where the reconstructions put the puck and the pusher
+(:mod:`keyin.eval.placement`; nothing where a dataset has no such objects).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+import lightning as L
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from keyin.eval.placement import FramePlacement, frame_placements
+from keyin.lit.modes import evaluating
+from keyin.losses.image import model_pixel_weights
+from keyin.losses.interpolation import autoencoding_bce
+from keyin.models import FrameAutoencoder
+from keyin.viz.keyframes import save_keyframe_pictures
+
+
+def valid_frame_index(n_valid: torch.Tensor, length: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """(clip, frame) indices of every valid frame of clips with ``n_valid`` (B,) valid frames of ``length``."""
+    valid = torch.arange(length, device=n_valid.device)[None] < n_valid[:, None]  # (B, L)
+    return valid.nonzero(as_tuple=True)
+
+
+def placement_metrics(placements: dict[str, FramePlacement], prefix: str) -> dict[str, float]:
+    """``<prefix><object>_drawn`` / ``_error_px`` / ``_iou`` of the objects that appear at all."""
+    metrics = {}
+    for name, frames in placements.items():
+        summary = frames.summary()
+        if summary.frames:
+            metrics.update({f"{prefix}{name}_drawn": summary.drawn, f"{prefix}{name}_iou": summary.iou,
+                            f"{prefix}{name}_within_2px": summary.within_2px})
+            if summary.drawn > 0:
+                metrics[f"{prefix}{name}_error_px"] = summary.centroid_error_px
+    return metrics
+
+
+class FrameAutoencoderModule(L.LightningModule):
+    """Trains a :class:`keyin.models.FrameAutoencoder` on single frames of the clips.
+
+    Args:
+        n_cond: conditioning frames at the start of each clip (frames like any other here).
+        frames_per_clip: valid frames drawn per clip and training step (uniformly, with replacement).
+        foreground_weight, foreground_threshold: the image likelihood's weight of changed pixels
+            (keyin/losses/image.py; 1: plain BCE).
+        The other arguments size the autoencoder; ``lr`` is Adam's.
+    """
+
+    stage = "frames"
+
+    def __init__(
+        self,
+        image_size: int,
+        channels: int,
+        n_cond: int,
+        embed_dim: int,
+        conv_width: int,
+        coord_channels: bool,
+        norm: str,
+        lr: float,
+        frames_per_clip: int = 4,
+        foreground_weight: float = 1.0,
+        foreground_threshold: float = 0.1,
+    ) -> None:
+        super().__init__()
+        if frames_per_clip < 1:
+            raise ValueError(f"frames_per_clip={frames_per_clip} must be >= 1")
+        self.save_hyperparameters()
+        self.network = FrameAutoencoder(image_size, channels, conv_width, embed_dim, coord_channels, norm)
+
+    def frame_bce(self, clips: torch.Tensor, clip: torch.Tensor, frame: torch.Tensor) -> torch.Tensor:
+        """Summed (pixel-weighted) BCE of reconstructing frames ``(clip, frame)`` (each (F,)) of
+        (B, L, C, H, W) clips; the weights compare each frame with its clip's first."""
+        weights = model_pixel_weights(clips, self.hparams)
+        frames = clips[clip, frame]  # (F, C, H, W)
+        return autoencoding_bce(
+            self.network.decoder, frames, self.network.encoder(frames), None if weights is None else weights[clip, frame]
+        )
+
+    def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
+        clips = batch["frames"]
+        n_valid = self.hparams.n_cond + batch["future_length"]  # (B,)
+        draws = torch.rand(len(clips), self.hparams.frames_per_clip, device=clips.device)
+        frame = (draws * n_valid[:, None]).long().flatten()  # (B·k,)
+        clip = torch.arange(len(clips), device=clips.device).repeat_interleave(self.hparams.frames_per_clip)
+        loss = self.frame_bce(clips, clip, frame) / len(frame)
+        self.log("train/bce_per_frame", loss, prog_bar=True)
+        return loss
+
+    def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
+        clip, frame = valid_frame_index(self.hparams.n_cond + batch["future_length"], batch["frames"].shape[1])
+        metrics = {"val/bce_per_frame": self.frame_bce(batch["frames"], clip, frame) / len(frame)}
+        if self.hparams.channels == 3:
+            metrics.update(placement_metrics(self.placements(batch["frames"][clip, frame]), "val/"))
+        self.log_dict(metrics, sync_dist=True)
+
+    @torch.no_grad()
+    def reconstruct(self, frames: torch.Tensor) -> torch.Tensor:
+        """(..., C, H, W) frames in [0, 1] -> their reconstructions, in [0, 1]."""
+        with evaluating(self):
+            return torch.sigmoid(self.network(frames.to(self.device))[1])
+
+    def placements(self, frames: torch.Tensor) -> dict[str, FramePlacement]:
+        """Where the reconstructions of (F, C, H, W) frames put the puck and the pusher."""
+        return frame_placements(self.reconstruct(frames), frames.to(self.device))
+
+    @torch.no_grad()
+    def test_metrics(self, clips: Dataset, folder: Path, batch_size: int = 50) -> dict[str, float | int]:
+        """BCE per frame and object placement over every valid frame of ``clips``, and
+        ``reconstructions.png`` (truth above reconstruction, four clips) in ``folder``; keyin-train
+        writes them to metrics.json."""
+        self.eval()
+        bce, frames_seen, parts = 0.0, 0, {}
+        for batch in DataLoader(clips, batch_size=batch_size, shuffle=False):
+            videos = batch["frames"].to(self.device)
+            clip, frame = valid_frame_index(self.hparams.n_cond + batch["future_length"].to(self.device), videos.shape[1])
+            bce += float(self.frame_bce(videos, clip, frame))
+            frames_seen += len(frame)
+            if self.hparams.channels == 3:
+                for name, placement in self.placements(videos[clip, frame]).items():
+                    parts.setdefault(name, []).append(placement)
+        first = next(iter(DataLoader(clips, batch_size=min(4, len(clips)), shuffle=False)))["frames"]
+        pairs = torch.stack([first, self.reconstruct(first).cpu()], dim=1).flatten(0, 1)  # (2K, L, C, H, W)
+        nothing = [[] for _ in pairs]
+        save_keyframe_pictures(folder, pairs, self.hparams.n_cond, nothing, nothing, name="reconstructions", per_column=2)
+        placements = {name: FramePlacement.cat(part) for name, part in parts.items()}
+        return {"bce_per_frame": bce / frames_seen, "frames": frames_seen, "n_sequences": len(clips),
+                **placement_metrics(placements, "")}
+
+    def discoverers(self, name: str) -> dict[str, Callable]:
+        """None: a frame model finds no keyframes."""
+        return {}
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr)
