@@ -30,7 +30,8 @@ def main() -> None:
     module, config = load_trained_module(args.ckpt, "frames")
     dataset = config["dataset"]
     started = time.perf_counter()
-    path = cached_embeddings(Path(args.data_dir) / dataset["name"], args.split, module.network.encoder, args.batch_size)
+    path = cached_embeddings(Path(args.data_dir) / dataset["name"], args.split, module.network.encoder, args.batch_size,
+                             progress=False)
     seconds = time.perf_counter() - started
     clips = EmbeddedClips(path, dataset["n_cond"], dataset["n_future"])
     frames = clips.embeddings.shape[0] * clips.embeddings.shape[1]
