@@ -9,7 +9,7 @@ export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 MUJOCO_GL=egl PYTHONPATH=$PWD  # this
 PY=${PY:-/work/main/.venv/bin/python}
 for width in 8 16; do
   date; $PY -m keyin.cli.train model=frame_autoencoder dataset=pushing backbone=ours seed=0 scale.conv_width=$width \
-    trainer.enable_progress_bar=false hydra.run.dir=runs/frames/pushing_w$width
+    scale.frames_steps=2000 trainer.enable_progress_bar=false hydra.run.dir=runs/frames/pushing_w$width
   $PY benchmarks/stage1_objects.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val --clips 200 \
     > benchmarks/results/stage1_objects_frames_w$width.md
   $PY benchmarks/encode_split.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val \
