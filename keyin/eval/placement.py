@@ -18,9 +18,8 @@ position to within half a pixel (tests/envs/test_segmentation.py).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
-import numpy as np
 import torch
 from torch import Tensor
 
@@ -41,11 +40,6 @@ class ObjectPlacement:
     within_2px: float
     iou: float
     frames: int  # frames whose truth shows the object
-
-    def as_dict(self) -> dict[str, float | int | None]:
-        """The scores as JSON values (NaN as None)."""
-        return {key: None if isinstance(value, float) and np.isnan(value) else value
-                for key, value in asdict(self).items()}
 
 
 @dataclass(frozen=True)

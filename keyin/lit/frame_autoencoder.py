@@ -80,10 +80,11 @@ class FrameAutoencoderModule(L.LightningModule):
     def frame_bce(self, clips: torch.Tensor, clip: torch.Tensor, frame: torch.Tensor) -> torch.Tensor:
         """Summed (pixel-weighted) BCE of reconstructing frames ``(clip, frame)`` (each (F,)) of
         (B, L, C, H, W) clips; the weights compare each frame with its clip's first."""
-        weights = model_pixel_weights(clips, self.hparams)
         frames = clips[clip, frame]  # (F, C, H, W)
+        pairs = torch.stack([clips[clip, 0], frames], dim=1)  # (F, 2, C, H, W): reference, frame
+        weights = model_pixel_weights(pairs, self.hparams)  # only the drawn frames' weights
         return autoencoding_bce(
-            self.network.decoder, frames, self.network.encoder(frames), None if weights is None else weights[clip, frame]
+            self.network.decoder, frames, self.network.encoder(frames), None if weights is None else weights[:, 1]
         )
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
