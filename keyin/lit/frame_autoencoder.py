@@ -15,20 +15,15 @@ from typing import Callable
 
 import lightning as L
 import torch
+import torch.nn.functional as F
 from torch.utils.data import DataLoader, Dataset
 
+from keyin.data.segments import valid_frames
 from keyin.eval.placement import FramePlacement, frame_placements
 from keyin.lit.modes import evaluating
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.interpolation import autoencoding_bce
 from keyin.models import FrameAutoencoder
 from keyin.viz.keyframes import save_keyframe_pictures
-
-
-def valid_frame_index(n_valid: torch.Tensor, length: int) -> tuple[torch.Tensor, torch.Tensor]:
-    """(clip, frame) indices of every valid frame of clips with ``n_valid`` (B,) valid frames of ``length``."""
-    valid = torch.arange(length, device=n_valid.device)[None] < n_valid[:, None]  # (B, L)
-    return valid.nonzero(as_tuple=True)
 
 
 def placement_metrics(placements: dict[str, FramePlacement], prefix: str) -> dict[str, float]:
@@ -77,15 +72,24 @@ class FrameAutoencoderModule(L.LightningModule):
         self.save_hyperparameters()
         self.network = FrameAutoencoder(image_size, channels, conv_width, embed_dim, coord_channels, norm)
 
-    def frame_bce(self, clips: torch.Tensor, clip: torch.Tensor, frame: torch.Tensor) -> torch.Tensor:
+    def reconstruction(self, clips: torch.Tensor, clip: torch.Tensor, frame: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Summed (pixel-weighted) BCE of reconstructing frames ``(clip, frame)`` (each (F,)) of
-        (B, L, C, H, W) clips; the weights compare each frame with its clip's first."""
+        (B, L, C, H, W) clips, the weights comparing each frame with its clip's first, and the
+        reconstructions' (F, C, H, W) logits."""
         frames = clips[clip, frame]  # (F, C, H, W)
         pairs = torch.stack([clips[clip, 0], frames], dim=1)  # (F, 2, C, H, W): reference, frame
         weights = model_pixel_weights(pairs, self.hparams)  # only the drawn frames' weights
-        return autoencoding_bce(
-            self.network.decoder, frames, self.network.encoder(frames), None if weights is None else weights[:, 1]
-        )
+        logits = self.network(frames)[1]
+        weights = None if weights is None else weights[:, 1]
+        bce = F.binary_cross_entropy_with_logits(logits, frames, weights, reduction="sum")
+        return bce, logits
+
+    def valid_reconstruction(self, batch: dict[str, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Summed BCE, logits and true frames (F, C, H, W) of every valid frame of a batch."""
+        clips = batch["frames"].to(self.device)
+        lengths = self.hparams.n_cond + batch["future_length"].to(self.device)  # (B,)
+        clip, frame = valid_frames(lengths, clips.shape[1]).nonzero(as_tuple=True)
+        return *self.reconstruction(clips, clip, frame), clips[clip, frame]
 
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         clips = batch["frames"]
@@ -93,15 +97,15 @@ class FrameAutoencoderModule(L.LightningModule):
         draws = torch.rand(len(clips), self.hparams.frames_per_clip, device=clips.device)
         frame = (draws * n_valid[:, None]).long().flatten()  # (B·k,)
         clip = torch.arange(len(clips), device=clips.device).repeat_interleave(self.hparams.frames_per_clip)
-        loss = self.frame_bce(clips, clip, frame) / len(frame)
+        loss = self.reconstruction(clips, clip, frame)[0] / len(frame)
         self.log("train/bce_per_frame", loss, prog_bar=True)
         return loss
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
-        clip, frame = valid_frame_index(self.hparams.n_cond + batch["future_length"], batch["frames"].shape[1])
-        metrics = {"val/bce_per_frame": self.frame_bce(batch["frames"], clip, frame) / len(frame)}
+        bce, logits, frames = self.valid_reconstruction(batch)
+        metrics = {"val/bce_per_frame": bce / len(frames)}
         if self.hparams.channels == 3:
-            metrics.update(placement_metrics(self.placements(batch["frames"][clip, frame]), "val/"))
+            metrics.update(placement_metrics(frame_placements(torch.sigmoid(logits), frames), "val/"))
         self.log_dict(metrics, sync_dist=True)
 
     @torch.no_grad()
@@ -109,10 +113,6 @@ class FrameAutoencoderModule(L.LightningModule):
         """(..., C, H, W) frames in [0, 1] -> their reconstructions, in [0, 1]."""
         with evaluating(self):
             return torch.sigmoid(self.network(frames.to(self.device))[1])
-
-    def placements(self, frames: torch.Tensor) -> dict[str, FramePlacement]:
-        """Where the reconstructions of (F, C, H, W) frames put the puck and the pusher."""
-        return frame_placements(self.reconstruct(frames), frames.to(self.device))
 
     @torch.no_grad()
     def test_metrics(self, clips: Dataset, folder: Path, batch_size: int = 50) -> dict[str, float | int]:
@@ -122,12 +122,11 @@ class FrameAutoencoderModule(L.LightningModule):
         self.eval()
         bce, frames_seen, parts = 0.0, 0, {}
         for batch in DataLoader(clips, batch_size=batch_size, shuffle=False):
-            videos = batch["frames"].to(self.device)
-            clip, frame = valid_frame_index(self.hparams.n_cond + batch["future_length"].to(self.device), videos.shape[1])
-            bce += float(self.frame_bce(videos, clip, frame))
-            frames_seen += len(frame)
+            batch_bce, logits, frames = self.valid_reconstruction(batch)
+            bce += float(batch_bce)
+            frames_seen += len(frames)
             if self.hparams.channels == 3:
-                for name, placement in self.placements(videos[clip, frame]).items():
+                for name, placement in frame_placements(torch.sigmoid(logits), frames).items():
                     parts.setdefault(name, []).append(placement)
         first = next(iter(DataLoader(clips, batch_size=min(4, len(clips)), shuffle=False)))["frames"]
         pairs = torch.stack([first, self.reconstruct(first).cpu()], dim=1).flatten(0, 1)  # (2K, L, C, H, W)
