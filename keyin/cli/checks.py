@@ -94,6 +94,23 @@ SCALE_COUNTS = (
 )
 
 
+def check_frozen_frames(cfg: Mapping[str, Any], two_stages: bool) -> None:
+    """backbone=frames names its frame autoencoder and serves two-stage models only."""
+    backbone = cfg["backbone"]
+    if not backbone.get("frozen_frames"):
+        return
+    if not two_stages:
+        raise ConfigError(
+            f"backbone=frames freezes the encoder and decoder of KEYIN's stage 1; model={cfg['model']['name']} "
+            f"has no stage 1 (use it with keyin, keyin_plus, jumpy or static, or pick backbone=ours)"
+        )
+    if not backbone.get("frames_ckpt") and cfg["stage"] != "keyframes":
+        raise ConfigError(
+            "backbone=frames needs backbone.frames_ckpt=<run dir>/checkpoints/frames/last.ckpt, a frame "
+            "autoencoder trained with the same sizes (keyin-train model=frame_autoencoder dataset=... backbone=ours)"
+        )
+
+
 def check_training(cfg: Mapping[str, Any]) -> None:
     """What keyin-train needs beyond the common checks."""
     if cfg["stage"] not in STAGES:
@@ -104,6 +121,7 @@ def check_training(cfg: Mapping[str, Any]) -> None:
             f"stage={cfg['stage']} needs a two-stage model (keyin, jumpy, static); "
             f"model={cfg['model']['name']} has {'one stage' if cfg['model']['trainable'] else 'no training'}: drop stage="
         )
+    check_frozen_frames(cfg, two_stages)
     for key in cfg["scale"]:
         if key not in SCALE_KEYS:
             raise ConfigError(

@@ -43,8 +43,11 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
     scale = cfg.scale
     stage1_folder = Path(cfg.stage1_dir) if cfg.stage1_dir else folder
     if cfg.stage in ("both", "interpolator"):
+        interpolator = instantiate(cfg.model.interpolator)
+        if cfg.backbone.frozen_frames:  # backbone=frames: a frame autoencoder's encoder and decoder
+            interpolator.load_frame_model(load_checkpoint(cfg.backbone.frames_ckpt, "frames"), cfg.backbone.frames_ckpt)
         fit_stage(
-            instantiate(cfg.model.interpolator),
+            interpolator,
             datamodule=datamodule(scale.stage1_batch_size),
             max_steps=scale.stage1_steps,
             **dict(common, run_dir=stage1_folder),

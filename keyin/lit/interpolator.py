@@ -5,6 +5,11 @@ interpolator sees the two boundary embeddings and the offset and must render the
 them; a seq2seq-VAE latent (posterior over the targets, KL to N(0, I)) lets it cope with segments
 whose boundaries are not true keyframes. An auto-encoding term keeps the decoder able to render
 any embedding (stage 2 never supervises keyframe images, β_ki = 0).
+
+With ``frozen_frames`` (``backbone=frames``, issue 25) the encoder and decoder are a frame
+autoencoder's (:meth:`InterpolatorModule.load_frame_model`), frozen from the first step: stage 1
+trains the interpolator (and its posterior) alone, through the fixed decoder, and has no
+auto-encoding term.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import torch
 import torch.nn.functional as F
 
 from keyin.data.segments import partition_segments, valid_frames
+from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
 from keyin.losses.soft_keyframe import gaussian_kl
@@ -51,6 +57,7 @@ class InterpolatorModule(L.LightningModule):
         diagnostic_clips: int = 24,
         foreground_weight: float = 1.0,
         foreground_threshold: float = 0.1,
+        frozen_frames: bool = False,
     ) -> None:
         super().__init__()
         if not 1 <= offset_min <= offset_max <= max_offset:
@@ -65,6 +72,38 @@ class InterpolatorModule(L.LightningModule):
         self.interpolator = Interpolator(embed_dim, max_offset, latent_dim, lstm_hidden, lstm_layers, mlp_hidden, step_input)
         self.posterior = InterpolatorPosterior(embed_dim, latent_dim, lstm_hidden) if latent_dim else None
         self.segment_rng = torch.Generator().manual_seed(0)
+        if frozen_frames:
+            self.freeze_frame_model()
+
+    def freeze_frame_model(self) -> None:
+        """No gradients into the encoder and decoder, and eval mode for them (``frozen_frames``)."""
+        for network in (self.encoder, self.decoder):
+            network.requires_grad_(False).eval()
+
+    def train(self, mode: bool = True) -> "InterpolatorModule":
+        """Switch the trainable parts; a frozen frame model stays in eval mode."""
+        super().train(mode)
+        if self.hparams.frozen_frames:
+            self.freeze_frame_model()
+        return self
+
+    def load_frame_model(self, checkpoint: dict, source: str) -> None:
+        """Copy the encoder and decoder of a frame autoencoder's checkpoint (``source`` names it in
+        errors); its sizes must be this stage 1's."""
+        saved = checkpoint["hyper_parameters"]
+        sizes = ("image_size", "channels", "embed_dim", "conv_width", "coord_channels", "norm")
+        differ = [f"{key}={saved.get(key)!r} (stage 1: {self.hparams[key]!r})" for key in sizes if saved.get(key) != self.hparams[key]]
+        if differ:
+            raise CheckpointError(
+                f"the frame autoencoder {source} is not this stage 1's frame model: {', '.join(differ)}; train one with "
+                f"this dataset=, scale= and backbone=ours (keyin-train model=frame_autoencoder ...), or set this "
+                f"stage 1's sizes to the autoencoder's"
+            )
+        for name in ("encoder", "decoder"):
+            prefix = f"network.{name}."
+            getattr(self, name).load_state_dict(
+                {key[len(prefix):]: value for key, value in checkpoint["state_dict"].items() if key.startswith(prefix)}
+            )
 
     def segment_bce(
         self,
@@ -92,25 +131,22 @@ class InterpolatorModule(L.LightningModule):
         clips = batch["frames"]  # (B, L, C, H, W)
         hp, n_clips = self.hparams, clips.shape[0]
         lengths = hp.n_cond + batch["future_length"]  # (B,) valid frames; the rest is padding
-        embeddings = self.encoder(clips)  # (B, L, E)
+        with torch.set_grad_enabled(not hp.frozen_frames):
+            embeddings = self.encoder(clips)  # (B, L, E)
         weights = self.pixel_weights(clips)
         segments = partition_segments(lengths, hp.offset_min, hp.offset_max, self.segment_rng)
         bce, _, kl = self.segment_bce(clips, weights, embeddings, segments, "posterior")
-        valid = valid_frames(lengths.to(clips.device), clips.shape[1])
-        autoencoding = autoencoding_bce(
-            self.decoder, clips[valid], embeddings[valid], None if weights is None else weights[valid],
-            hp.ae_frames, self.segment_rng,
-        )
-        loss = bce.sum() / n_clips + hp.kl_weight * (kl.sum() / n_clips) + hp.ae_weight * (autoencoding / n_clips)
-        self.log_dict(
-            {
-                "train/loss": loss,
-                "train/bce_per_frame": bce.sum() / (segments[2].sum() + 1e-9),
-                "train/kl_per_segment": kl.mean(),
-                "train/ae_per_frame": autoencoding / valid.sum(),
-            },
-            prog_bar=True,
-        )
+        loss = bce.sum() / n_clips + hp.kl_weight * (kl.sum() / n_clips)
+        logged = {"train/bce_per_frame": bce.sum() / (segments[2].sum() + 1e-9), "train/kl_per_segment": kl.mean()}
+        if not hp.frozen_frames:  # a frozen frame model has learnt to auto-encode already
+            valid = valid_frames(lengths.to(clips.device), clips.shape[1])
+            autoencoding = autoencoding_bce(
+                self.decoder, clips[valid], embeddings[valid], None if weights is None else weights[valid],
+                hp.ae_frames, self.segment_rng,
+            )
+            loss = loss + hp.ae_weight * (autoencoding / n_clips)
+            logged["train/ae_per_frame"] = autoencoding / valid.sum()
+        self.log_dict({"train/loss": loss, **logged}, prog_bar=True)
         return loss
 
     @torch.no_grad()
@@ -145,4 +181,5 @@ class InterpolatorModule(L.LightningModule):
             self.log(f"val/bce_bent_o{offset}", row["bent"], sync_dist=True)
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr, betas=(0.9, 0.999))
+        trainable = [p for p in self.parameters() if p.requires_grad]
+        return torch.optim.Adam(trainable, lr=self.hparams.lr, betas=(0.9, 0.999))

@@ -1,6 +1,6 @@
 """keyin-train model=frame_autoencoder end to end at scale=smoke on a few pushing demos: checkpoint,
 metrics.json with the object scores, the reconstructions picture, and the dataset's embeddings cached
-under the trained encoder."""
+under the trained encoder; both stages of a two-stage model on it, frozen (backbone=frames)."""
 
 import json
 
@@ -13,7 +13,7 @@ from keyin.data.embeddings import EmbeddedClips, cached_embeddings, encoder_fing
 from keyin.data.hdf5 import split_files
 from keyin.lit.checkpoints import load_trained_module
 from keyin.lit.frame_autoencoder import FrameAutoencoderModule
-from tests.cli.runner import train_on_few_pushing_demos
+from tests.cli.runner import error_line, last_json, run, train_on_few_pushing_demos
 
 TRAIN = ("model=frame_autoencoder", "dataset=pushing", "scale=smoke", "logger=none", "num_workers=0",
          "trainer.enable_progress_bar=false", "hydra.run.dir=run")
@@ -48,3 +48,28 @@ def test_its_encoder_caches_the_datasets_embeddings(trained):
     frames = ShardClips(split_files(root / "data" / "pushing", "val"), (64, 64, 3), 1, 30)[2]["frames"]
     with torch.no_grad():
         torch.testing.assert_close(cached["embeddings"], encoder.eval()(frames), rtol=0, atol=1e-5)
+
+
+def test_backbone_frames_trains_both_stages_on_the_frozen_autoencoder(trained):
+    root, _ = trained
+    frames_ckpt = root / "run" / "checkpoints" / "frames" / "last.ckpt"
+    result = run("train", "model=jumpy", "dataset=pushing", "backbone=frames", f"backbone.frames_ckpt={frames_ckpt}",
+                 *[arg for arg in TRAIN if not arg.startswith(("model=", "hydra."))], "hydra.run.dir=on_frames", cwd=root)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert last_json(result.stdout)["backbone"] == "frames"
+    autoencoder = torch.load(frames_ckpt, weights_only=True)["state_dict"]
+    for stage, prefix in (("interpolator", ""), ("keyframes", "model.")):
+        saved = torch.load(root / "on_frames" / "checkpoints" / stage / "last.ckpt", weights_only=True)["state_dict"]
+        for name in ("encoder", "decoder"):
+            weights = {key: value for key, value in saved.items() if key.startswith(f"{prefix}{name}.")}
+            assert weights and all(
+                torch.equal(value, autoencoder[f"network.{key[len(prefix):]}"]) for key, value in weights.items()
+            ), (stage, name)
+
+
+@pytest.mark.parametrize("overrides, says", [
+    (("model=keyin", "backbone=frames"), "backbone=frames needs backbone.frames_ckpt="),
+    (("model=tap", "backbone=frames", "backbone.frames_ckpt=x.ckpt"), "model=tap has no stage 1"),
+])
+def test_backbone_frames_without_its_autoencoder_or_on_a_one_stage_model_is_refused(tmp_path, overrides, says):
+    assert says in error_line(run("train", *overrides, "logger=none", cwd=tmp_path))
