@@ -1,11 +1,15 @@
 """The stage-2 gate: keyframe F1 of the exact best segmentation under a stage-1 checkpoint.
 
     python benchmarks/segmentation_gate.py runs/<run>/checkpoints/interpolator/last.ckpt --clips 200
+    python benchmarks/segmentation_gate.py <ckpt> --data-dir data/pushing --split val --space embeddings
 
-Scores the first ``--clips`` test clips (``data/brownian`` test split; ``keyin-generate
-dataset=brownian 'splits={test: 1000}'`` writes it) with :mod:`keyin.decode.segmentation`, and
-compares the summed interpolation BCE of three hard segmentations: the DP optimum, the ground
-truth, and Constant every ``c`` frames. Stage 2 can only discover what the DP finds.
+Scores the first ``--clips`` clips of a split (default: ``data/brownian``'s test split; ``keyin-generate
+dataset=brownian 'splits={test: 1000}'`` writes it) with :mod:`keyin.decode.segmentation`, each clip
+within its own valid frames, and compares the summed interpolation cost (pixel BCE, or squared error
+of the embeddings) of three hard segmentations: the DP optimum, the ground truth, and Constant every
+``c`` frames (on full-length clips). The DP's keyframes are scored by the information rule's two
+columns (a padded clip's sequence end removed from both sides, or given to both). Stage 2 can only
+discover what the DP finds.
 """
 
 from __future__ import annotations
@@ -22,8 +26,8 @@ from torch.utils.data import Subset
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.decode.segment_costs import embedding_costs, interpolation_costs
-from keyin.decode.segmentation import best_segmentation, path_cost
-from keyin.eval.f1 import keyframe_lists, keyframe_scores
+from keyin.decode.segmentation import decode_by_length, path_cost
+from keyin.eval.f1 import column_scores, keyframe_lists
 from keyin.lit.checkpoints import load_checkpoint
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.losses.image import future_pixel_weights
@@ -37,45 +41,56 @@ def main() -> None:
     parser.add_argument("--constant", type=int, default=6)
     parser.add_argument("--space", default="pixels", choices=("pixels", "embeddings"))
     parser.add_argument("--data-dir", default="data/brownian")
+    parser.add_argument("--split", default="test")
     args = parser.parse_args()
     checkpoint = load_checkpoint(args.ckpt, "interpolator")
     stage1 = InterpolatorModule(**checkpoint["hyper_parameters"])
     stage1.load_state_dict(checkpoint["state_dict"])
     hp = stage1.hparams
-    clips = ShardClips(split_files(Path(args.data_dir), "test"), (hp.image_size, hp.image_size, hp.channels),
+    clips = ShardClips(split_files(Path(args.data_dir), args.split), (hp.image_size, hp.image_size, hp.channels),
                        hp.n_cond, hp.n_future)
     clips = Subset(clips, range(min(args.clips, len(clips))))
-    batch = next(iter(torch.utils.data.DataLoader(clips, batch_size=len(clips))))  # full-length clips
+    batch = next(iter(torch.utils.data.DataLoader(clips, batch_size=len(clips))))  # every clip at once
     started = time.perf_counter()
+    lengths = batch["future_length"]  # (B,) valid future frames
     with torch.no_grad():
         boundary_emb = stage1.encoder(batch["frames"])[:, hp.n_cond - 1 :]  # (B, N + 1, E)
-        if args.space == "embeddings":
-            costs = embedding_costs(stage1.interpolator, boundary_emb)
-        else:
-            weights = future_pixel_weights(stage1.pixel_weights(batch["frames"]), hp.n_cond)
-            costs = interpolation_costs(
-                stage1.interpolator, stage1.decoder, boundary_emb, batch["frames"][:, hp.n_cond :].flatten(2), weights
-            )
-    _, dp_positions = best_segmentation(costs, args.keyframes)
+        weights = future_pixel_weights(stage1.pixel_weights(batch["frames"]), hp.n_cond)
+        frames = batch["frames"][:, hp.n_cond :].flatten(2)  # (B, N, D)
+
+        def segment_costs(rows: torch.Tensor, length: int) -> torch.Tensor:
+            """(R, length, S) costs of the clips ``rows``, within their ``length`` valid frames."""
+            if args.space == "embeddings":
+                return embedding_costs(stage1.interpolator, boundary_emb[rows, : length + 1])
+            return interpolation_costs(stage1.interpolator, stage1.decoder, boundary_emb[rows, : length + 1],
+                                       frames[rows, :length], None if weights is None else weights[rows, :length])
+
+        dp_positions = decode_by_length(segment_costs, lengths, args.keyframes, hp.max_offset)
+        full = (lengths == hp.n_future).nonzero().flatten()
+        costs = segment_costs(full, hp.n_future)  # the summed costs below: full-length clips only
     seconds = time.perf_counter() - started
     truth = keyframe_lists(batch["keyframes"])
-    scores = keyframe_scores(dp_positions, truth, hp.n_future)
-    constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(truth)
-    dp = path_cost(costs, dp_positions)
+    scores = column_scores(dp_positions, truth, lengths.tolist(), hp.n_future)
+    constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(full)
+    dp = path_cost(costs, [dp_positions[i] for i in full.tolist()])
     n_dp = sum(map(len, dp_positions)) / len(dp_positions)
     print(f"## Segmentation gate: {args.ckpt}\n")
-    print(f"- command: `python benchmarks/segmentation_gate.py {args.ckpt} --clips {args.clips} --space {args.space}`")
+    print(f"- command: `python benchmarks/segmentation_gate.py {args.ckpt} --clips {args.clips} --space {args.space} "
+          f"--data-dir {args.data_dir} --split {args.split}`")
     print(f"- machine: {platform.machine()}, {torch.get_num_threads()} threads, torch {torch.__version__}, "
           f"{date.today()}; step {checkpoint.get('global_step')}; {seconds:.1f} s\n")
     print(f"| segmentation | mean summed cost ({args.space}) |")
     print("|---|---|")
-    for name, positions_cost in [("DP optimum", dp), ("ground truth", path_cost(costs, truth)),
+    full_truth = [truth[i] for i in full.tolist()]
+    for name, positions_cost in [("DP optimum", dp), ("ground truth", path_cost(costs, full_truth)),
                                  (f"constant {args.constant}", path_cost(costs, constant))]:
         finite = positions_cost[torch.isfinite(positions_cost)]
         print(f"| {name} | {finite.mean():.1f} ({len(finite)} clips) |")
-    print(f"\nDP keyframes vs ground truth: F1 {scores['f1']:.3f}, ±1 {scores['f1_tol1']:.3f}, "
-          f"precision {scores['precision']:.3f}, recall {scores['recall']:.3f}, "
-          f"{n_dp:.2f} keyframes/clip")
+    print(f"\nDP keyframes vs ground truth ({len(lengths)} clips, {len(full)} of full length; interior / with ends):")
+    for column in ("interior", "with_ends"):
+        print(f"- {column}: F1 {scores['f1_' + column]:.3f}, ±1 {scores['f1_tol1_' + column]:.3f}, "
+              f"precision {scores['precision_' + column]:.3f}, recall {scores['recall_' + column]:.3f}, "
+              f"{scores['n_predicted_' + column]:.2f} keyframes/clip")
 
 
 if __name__ == "__main__":

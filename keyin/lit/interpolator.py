@@ -75,6 +75,11 @@ class InterpolatorModule(L.LightningModule):
         if frozen_frames:
             self.freeze_frame_model()
 
+    @property
+    def frozen_by_design(self) -> str | None:
+        """What stays frozen in eval mode while this stage trains (said once by keyin.lit.run), or None."""
+        return "stage 1: the frame autoencoder's encoder and decoder (backbone=frames)" if self.hparams.frozen_frames else None
+
     def freeze_frame_model(self) -> None:
         """No gradients into the encoder and decoder, and eval mode for them (``frozen_frames``)."""
         for network in (self.encoder, self.decoder):

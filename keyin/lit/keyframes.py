@@ -30,6 +30,7 @@ class KeyframeModule(L.LightningModule):
     """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``)."""
 
     stage = "keyframes"
+    frozen_by_design = "stage 2: stage 1's encoder, decoder and interpolator"
 
     def __init__(
         self,

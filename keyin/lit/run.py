@@ -90,9 +90,10 @@ def fit_stage(
             module.load_state_dict(saved["state_dict"])
             return last
     with warnings.catch_warnings():
-        if module.stage == "keyframes":  # the frozen stage 1 is in eval mode by design: said once, in our words
+        frozen = getattr(module, "frozen_by_design", None)
+        if frozen:  # frozen networks are in eval mode by design: said once, in our words
             warnings.filterwarnings("ignore", message=r"Found \d+ module\(s\) in eval mode")
-            log.info("stage 2: stage 1's encoder, decoder and interpolator stay frozen in eval mode (by design)")
+            log.info("%s stay frozen in eval mode (by design)", frozen)
         # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
         trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
     trainer.save_checkpoint(last, weights_only=False)  # the full final state (optimizer too), whatever the cadence

@@ -57,6 +57,7 @@ def test_backbone_frames_trains_both_stages_on_the_frozen_autoencoder(trained):
                  *[arg for arg in TRAIN if not arg.startswith(("model=", "hydra."))], "hydra.run.dir=on_frames", cwd=root)
     assert result.returncode == 0, result.stderr[-3000:]
     assert last_json(result.stdout)["backbone"] == "frames"
+    assert "module(s) in eval mode" not in result.stderr  # frozen by design, said in our words instead
     autoencoder = torch.load(frames_ckpt, weights_only=True)["state_dict"]
     for stage, prefix in (("interpolator", ""), ("keyframes", "model.")):
         saved = torch.load(root / "on_frames" / "checkpoints" / stage / "last.ckpt", weights_only=True)["state_dict"]
