@@ -75,17 +75,19 @@ def save_video_scores(found: Discovered, videos: Sequence[str], n_future: int, f
     return path
 
 
-@torch.no_grad()
-def save_predictions(discoverers: dict[str, Discoverer], clips: Dataset, folder: Path, count: int = 8) -> Path:
-    """``predictions.json``: the true and each method's keyframes on the first ``count`` clips.
+def save_predictions(found: dict[str, Discovered], folder: Path) -> Path:
+    """``predictions.json``: the true keyframes, valid future lengths and each method's keyframes
+    (method → per clip) on every scored clip, in order.
 
-    ``keyin-report`` draws its method-comparison figure from these files.
+    ``keyin-report`` draws its method-comparison figure from the first clips of these files;
+    ``benchmarks/recall_by_turn.py`` reads all of them.
     """
-    batch = next(iter(DataLoader(clips, batch_size=min(count, len(clips)), shuffle=False)))
+    first = next(iter(found.values()))
     record = {
-        "clips": list(range(len(batch["frames"]))),
-        "truth": keyframe_lists(batch["keyframes"]),
-        "predicted": {name: find(batch["frames"], batch["future_length"]) for name, find in discoverers.items()},
+        "clips": list(range(len(first.truth))),
+        "truth": first.truth,
+        "lengths": first.lengths,
+        "predicted": {name: run.predicted for name, run in found.items()},
     }
     path = Path(folder) / "predictions.json"
     atomic_write_text(path, json.dumps(record))
@@ -130,7 +132,7 @@ def score_methods(
     named = videos if videos is not None else [str(index) for index in range(len(clips))]
     save_video_scores(found[method], named, n_future, folder)
     save_examples(discoverers[method], clips, n_cond, folder)
-    save_predictions(discoverers, clips, folder)
+    save_predictions(found, folder)
     metrics: dict[str, Any] = dict(main, method=method)
     if others:
         metrics["variants"] = dict(others)
