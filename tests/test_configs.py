@@ -49,7 +49,7 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
 
 
 # Options added since keyin 0.1, at the default that does what 0.1 did: module → {key: value}.
-ADDED_SINCE = {"keyframes": {"teacher_chain": False, "teacher_leaves": False}}
+ADDED_SINCE = {"keyframes": {"teacher_chain": False, "teacher_leaves": False}, "interpolator": {"frozen_frames": False}}
 # Classes that moved since keyin 0.1, old path → new path.
 MOVED_TARGETS = {f"keyin.eval.baselines.{name}": f"keyin.decode.baselines.{name}" for name in ("RandomKeyframes", "ConstantKeyframes")}
 
