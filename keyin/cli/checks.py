@@ -95,11 +95,12 @@ SCALE_COUNTS = (
 
 
 def check_frozen_frames(cfg: Mapping[str, Any], two_stages: bool) -> None:
-    """backbone=frames names its frame autoencoder and serves two-stage models only."""
+    """backbone=frames names its frame autoencoder and serves two-stage models (and untrained baselines,
+    which use no frame model, so that one sweep covers a table's rows)."""
     backbone = cfg["backbone"]
     if not backbone.get("frozen_frames"):
         return
-    if not two_stages:
+    if cfg["model"]["trainable"] and not two_stages:  # an untrained baseline uses no frame model at all
         raise ConfigError(
             f"backbone=frames freezes the encoder and decoder of KEYIN's stage 1; model={cfg['model']['name']} "
             f"has no stage 1 (use it with keyin, keyin_plus, jumpy or static, or pick backbone=ours)"

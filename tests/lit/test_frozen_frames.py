@@ -4,7 +4,8 @@ autoencoder's, stay unchanged by training, and only the interpolator learns."""
 import pytest
 import torch
 
-from keyin.errors import CheckpointError
+from keyin.cli.checks import check_frozen_frames
+from keyin.errors import CheckpointError, ConfigError
 from keyin.lit.frame_autoencoder import FrameAutoencoderModule
 from keyin.lit.interpolator import InterpolatorModule
 from tests.lit.test_keyframe_teacher import STAGE1
@@ -62,3 +63,20 @@ def test_an_autoencoder_of_other_sizes_is_refused_with_the_sizes_that_differ():
     module = InterpolatorModule(**STAGE1, frozen_frames=True)
     with pytest.raises(CheckpointError, match=r"conv_width=8 \(stage 1: 4\).*backbone=ours"):
         module.load_frame_model(autoencoder_checkpoint(conv_width=8), "ae.ckpt")
+
+
+@pytest.mark.parametrize("model, stage, frames_ckpt, refused", [
+    ({"name": "jumpy", "trainable": True}, "both", "ae.ckpt", None),
+    ({"name": "jumpy", "trainable": True}, "both", None, "needs backbone.frames_ckpt="),
+    ({"name": "jumpy", "trainable": True}, "keyframes", None, None),  # stage 2 reads stage 1's checkpoint
+    ({"name": "tap", "trainable": True, "module": {}}, "both", "ae.ckpt", "model=tap has no stage 1"),
+    ({"name": "constant", "trainable": False}, "both", "ae.ckpt", None),  # uses no frame model: one sweep, every row
+])
+def test_backbone_frames_serves_two_stage_models_and_untrained_baselines(model, stage, frames_ckpt, refused):
+    cfg = {"model": model, "stage": stage, "backbone": {"frozen_frames": True, "frames_ckpt": frames_ckpt}}
+    two_stages = model["trainable"] and "module" not in model
+    if refused is None:
+        check_frozen_frames(cfg, two_stages)
+    else:
+        with pytest.raises(ConfigError, match=refused):
+            check_frozen_frames(cfg, two_stages)
