@@ -58,16 +58,21 @@ def main() -> None:
         weights = future_pixel_weights(stage1.pixel_weights(batch["frames"]), hp.n_cond)
         frames = batch["frames"][:, hp.n_cond :].flatten(2)  # (B, N, D)
 
+        by_length: dict[int, torch.Tensor] = {}  # the costs of each length's clips, as the DP asked for them
+
         def segment_costs(rows: torch.Tensor, length: int) -> torch.Tensor:
             """(R, length, S) costs of the clips ``rows``, within their ``length`` valid frames."""
             if args.space == "embeddings":
-                return embedding_costs(stage1.interpolator, boundary_emb[rows, : length + 1])
-            return interpolation_costs(stage1.interpolator, stage1.decoder, boundary_emb[rows, : length + 1],
-                                       frames[rows, :length], None if weights is None else weights[rows, :length])
+                costs = embedding_costs(stage1.interpolator, boundary_emb[rows, : length + 1])
+            else:
+                costs = interpolation_costs(stage1.interpolator, stage1.decoder, boundary_emb[rows, : length + 1],
+                                            frames[rows, :length], None if weights is None else weights[rows, :length])
+            by_length[length] = costs
+            return costs
 
         dp_positions = decode_by_length(segment_costs, lengths, args.keyframes, hp.max_offset)
-        full = (lengths == hp.n_future).nonzero().flatten()
-        costs = segment_costs(full, hp.n_future)  # the summed costs below: full-length clips only
+        full = (lengths == hp.n_future).nonzero().flatten()  # the rows the DP scored at length N, in its order
+        costs = by_length.get(hp.n_future, boundary_emb.new_zeros(0, hp.n_future, hp.max_offset))  # the sums below: full-length clips only
     seconds = time.perf_counter() - started
     truth = keyframe_lists(batch["keyframes"])
     scores = column_scores(dp_positions, truth, lengths.tolist(), hp.n_future)
