@@ -9,7 +9,10 @@ within its own valid frames, and compares the summed interpolation cost (pixel B
 of the embeddings) of three hard segmentations: the DP optimum, the ground truth, and Constant every
 ``c`` frames (on full-length clips). The DP's keyframes are scored by the information rule's two
 columns (a padded clip's sequence end removed from both sides, or given to both). Stage 2 can only
-discover what the DP finds.
+discover what the DP finds. The same is then done with the length prior removed: each offset's mean
+cost over the scored clips subtracted from its segments (label-free), so that a spacing is not
+preferred for its segment lengths alone (interpolation costs grow faster than linearly with the
+offset, which favours an even spacing).
 """
 
 from __future__ import annotations
@@ -71,26 +74,45 @@ def main() -> None:
             return costs
 
         dp_positions = decode_by_length(segment_costs, lengths, args.keyframes, hp.max_offset)
-        full = (lengths == hp.n_future).nonzero().flatten()  # the rows the DP scored at length N, in its order
-        costs = by_length.get(hp.n_future, boundary_emb.new_zeros(0, hp.n_future, hp.max_offset))  # the sums below: full-length clips only
     seconds = time.perf_counter() - started
-    truth = keyframe_lists(batch["keyframes"])
-    scores = column_scores(dp_positions, truth, lengths.tolist(), hp.n_future)
-    constant = [list(range(args.constant - 1, hp.n_future - 1, args.constant))] * len(full)
-    dp = path_cost(costs, [dp_positions[i] for i in full.tolist()])
-    n_dp = sum(map(len, dp_positions)) / len(dp_positions)
     print(f"## Segmentation gate: {args.ckpt}\n")
     print(f"- command: `python benchmarks/segmentation_gate.py {args.ckpt} --clips {args.clips} --space {args.space} "
-          f"--data-dir {args.data_dir} --split {args.split}`")
+          f"--data-dir {args.data_dir} --split {args.split} --keyframes {args.keyframes} --constant {args.constant}`")
     print(f"- machine: {platform.machine()}, {torch.get_num_threads()} threads, torch {torch.__version__}, "
-          f"{date.today()}; step {checkpoint.get('global_step')}; {seconds:.1f} s\n")
-    print(f"| segmentation | mean summed cost ({args.space}) |")
+          f"{date.today()}; step {checkpoint.get('global_step')}; {seconds:.1f} s")
+    truth = keyframe_lists(batch["keyframes"])
+    report(args, "segment costs", by_length, dp_positions, truth, lengths, hp.n_future)
+    length_prior = offset_means(by_length)  # (S,) what a segment of each offset costs on average
+    centred = {length: costs - length_prior for length, costs in by_length.items()}
+    centred_positions = decode_by_length(lambda rows, length: centred[length], lengths, args.keyframes, hp.max_offset)
+    print(f"\nThe length prior removed: each offset's mean cost over these clips ({', '.join(f'{m:.1f}' for m in length_prior.tolist())})"
+          " subtracted, so that no spacing is cheaper for its lengths alone.")
+    report(args, "segment costs minus their offset's mean", centred, centred_positions, truth, lengths, hp.n_future)
+
+
+def offset_means(by_length: dict[int, torch.Tensor]) -> torch.Tensor:
+    """(S,) mean cost of the in-clip segments of each offset, over every clip and start."""
+    costs = torch.cat([table.flatten(0, 1) for table in by_length.values()])  # (R, S)
+    inside = costs.isfinite()
+    return torch.where(inside, costs, 0.0).sum(0) / inside.sum(0).clamp(min=1)
+
+
+def report(args: argparse.Namespace, name: str, by_length: dict[int, torch.Tensor], dp_positions: list[list[int]],
+           truth: list[list[int]], lengths: torch.Tensor, n_future: int) -> None:
+    """Print the summed ``name`` of the DP optimum, the labels and Constant every ``args.constant``
+    frames (full-length clips), and the DP's keyframe scores by the information rule's two columns."""
+    full = (lengths == n_future).nonzero().flatten()  # the rows the DP scored at length N, in its order
+    costs = by_length.get(n_future, torch.zeros(0, n_future, 1))  # the sums below: full-length clips only
+    constant = [list(range(args.constant - 1, n_future - 1, args.constant))] * len(full)
+    print(f"\n| segmentation | mean summed {name} ({args.space}) |")
     print("|---|---|")
-    full_truth = [truth[i] for i in full.tolist()]
-    for name, positions_cost in [("DP optimum", dp), ("ground truth", path_cost(costs, full_truth)),
-                                 (f"constant {args.constant}", path_cost(costs, constant))]:
-        finite = positions_cost[torch.isfinite(positions_cost)]
-        print(f"| {name} | {finite.mean():.1f} ({len(finite)} clips) |")
+    for label, positions in [("DP optimum", [dp_positions[i] for i in full.tolist()]),
+                             ("ground truth", [truth[i] for i in full.tolist()]),
+                             (f"constant {args.constant}", constant)]:
+        totals = path_cost(costs, positions)
+        finite = totals[torch.isfinite(totals)]
+        print(f"| {label} | {finite.mean():.1f} ({len(finite)} clips) |")
+    scores = column_scores(dp_positions, truth, lengths.tolist(), n_future)
     print(f"\nDP keyframes vs ground truth ({len(lengths)} clips, {len(full)} of full length; interior / with ends):")
     for column in ("interior", "with_ends"):
         print(f"- {column}: F1 {scores['f1_' + column]:.3f}, ±1 {scores['f1_tol1_' + column]:.3f}, "
