@@ -84,6 +84,7 @@ def main() -> None:
     report(args, "segment costs", by_length, dp_positions, truth, lengths, hp.n_future)
     length_prior = offset_means(by_length)  # (S,) what a segment of each offset costs on average
     centred = {length: costs - length_prior for length, costs in by_length.items()}
+    # the DP asks for each length's rows in the same order as above, so the cached tables are theirs
     centred_positions = decode_by_length(lambda rows, length: centred[length], lengths, args.keyframes, hp.max_offset)
     print(f"\nThe length prior removed: each offset's mean cost over these clips ({', '.join(f'{m:.1f}' for m in length_prior.tolist())})"
           " subtracted, so that no spacing is cheaper for its lengths alone.")
