@@ -94,13 +94,18 @@ SCALE_COUNTS = (
 )
 
 
-def check_frozen_frames(cfg: Mapping[str, Any], two_stages: bool) -> None:
+def is_two_stage(model: Mapping[str, Any]) -> bool:
+    """Whether ``model`` trains KEYIN's two stages (keyin, jumpy, static), not one module of its own or nothing."""
+    return bool(model["trainable"]) and "module" not in model
+
+
+def check_frozen_frames(cfg: Mapping[str, Any]) -> None:
     """backbone=frames names its frame autoencoder and serves two-stage models (and untrained baselines,
     which use no frame model, so that one sweep covers a table's rows)."""
     backbone = cfg["backbone"]
     if not backbone.get("frozen_frames"):
         return
-    if cfg["model"]["trainable"] and not two_stages:  # an untrained baseline uses no frame model at all
+    if cfg["model"]["trainable"] and not is_two_stage(cfg["model"]):  # an untrained baseline uses no frame model at all
         raise ConfigError(
             f"backbone=frames freezes the encoder and decoder of KEYIN's stage 1; model={cfg['model']['name']} "
             f"has no stage 1 (use it with keyin, keyin_plus, jumpy or static, or pick backbone=ours)"
@@ -116,13 +121,12 @@ def check_training(cfg: Mapping[str, Any]) -> None:
     """What keyin-train needs beyond the common checks."""
     if cfg["stage"] not in STAGES:
         raise ConfigError(f"stage={cfg['stage']!r}; allowed: {', '.join(STAGES)}")
-    two_stages = cfg["model"]["trainable"] and "module" not in cfg["model"]
-    if cfg["stage"] != "both" and not two_stages:
+    if cfg["stage"] != "both" and not is_two_stage(cfg["model"]):
         raise ConfigError(
             f"stage={cfg['stage']} needs a two-stage model (keyin, jumpy, static); "
             f"model={cfg['model']['name']} has {'one stage' if cfg['model']['trainable'] else 'no training'}: drop stage="
         )
-    check_frozen_frames(cfg, two_stages)
+    check_frozen_frames(cfg)
     for key in cfg["scale"]:
         if key not in SCALE_KEYS:
             raise ConfigError(

@@ -74,9 +74,8 @@ def test_an_autoencoder_of_other_sizes_is_refused_with_the_sizes_that_differ():
 ])
 def test_backbone_frames_serves_two_stage_models_and_untrained_baselines(model, stage, frames_ckpt, refused):
     cfg = {"model": model, "stage": stage, "backbone": {"frozen_frames": True, "frames_ckpt": frames_ckpt}}
-    two_stages = model["trainable"] and "module" not in model
     if refused is None:
-        check_frozen_frames(cfg, two_stages)
+        check_frozen_frames(cfg)
     else:
         with pytest.raises(ConfigError, match=refused):
-            check_frozen_frames(cfg, two_stages)
+            check_frozen_frames(cfg)
