@@ -21,14 +21,18 @@ from keyin.cli.tracking import job_logger
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
-from keyin.lit.checkpoints import load_checkpoint
+from keyin.lit.checkpoints import load_checkpoint, load_stage1
 from keyin.lit.run import fit_stage
+from keyin.pretrained import is_pretrained
 
 Discoverers = dict[str, Callable]
 
 
-def stage1_checkpoint(cfg: DictConfig, stage1_folder: Path) -> Path:
-    """The stage-1 checkpoint that stage 2 starts from; one clear error if there is none."""
+def stage1_checkpoint(cfg: DictConfig, stage1_folder: Path) -> Path | str:
+    """The checkpoint that stage 2 takes its stage 1 from (a stage-1 one, or a stage-2 one or
+    ``pretrained:<name>``, whose frozen stage 1 is taken); one clear error if there is none."""
+    if cfg.interpolator_ckpt and is_pretrained(cfg.interpolator_ckpt):
+        return cfg.interpolator_ckpt
     path = Path(cfg.interpolator_ckpt or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt")
     if not path.is_file():
         raise CheckpointError(
@@ -54,7 +58,7 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
         )
     if cfg.stage == "interpolator":
         return {}
-    stage1 = load_checkpoint(stage1_checkpoint(cfg, stage1_folder), "interpolator")
+    stage1 = load_stage1(stage1_checkpoint(cfg, stage1_folder))
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)

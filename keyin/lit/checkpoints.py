@@ -92,6 +92,33 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     return checkpoint
 
 
+STAGE1_NETWORKS = ("encoder.", "decoder.", "interpolator.")  # stage 1's networks inside a stage-2 ``model.``
+
+
+def load_stage1(path: str | Path) -> dict[str, Any]:
+    """The stage-1 checkpoint that stage 2 starts from, or the frozen stage 1 inside a stage-2
+    checkpoint (``pretrained:<name>`` included): ``hyper_parameters`` and ``state_dict`` of the
+    interpolator module, so that several stage 2s can be trained on one shipped stage 1.
+
+    Raises:
+        CheckpointError: as :func:`load_checkpoint`, or a checkpoint of neither stage.
+    """
+    checkpoint = load_checkpoint(path)
+    if checkpoint[STAGE_KEY] == "interpolator":
+        return checkpoint
+    if checkpoint[STAGE_KEY] != "keyframes":
+        raise CheckpointError(
+            f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint; stage 2 starts from {STAGE_CHECKPOINTS['interpolator']} "
+            f"or from the stage 1 inside {STAGE_CHECKPOINTS['keyframes']}"
+        )
+    networks = {
+        name[len("model.") :]: value
+        for name, value in checkpoint["state_dict"].items()
+        if name.startswith(tuple(f"model.{network}" for network in STAGE1_NETWORKS))
+    }
+    return {"hyper_parameters": checkpoint["hyper_parameters"]["stage1"], "state_dict": networks}
+
+
 class AtomicCheckpointIO(TorchCheckpointIO):
     """Writes each checkpoint next to its destination and renames it into place, so a crash or a
     full disk leaves the previous ``last.ckpt`` whole (Lightning's default may stage the file in

@@ -22,7 +22,7 @@ from keyin.lit.checkpoints import upgrade_state_dict
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights
-from keyin.losses.soft_keyframe import argmax_positions, gaussian_kl, keyin_loss, offset_entropy
+from keyin.losses.soft_keyframe import REDUCTIONS, argmax_positions, gaussian_kl, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
 
 
@@ -57,6 +57,13 @@ class KeyframeModule(L.LightningModule):
         teacher_leaves: bool = False,  # the teacher also says where the chain leaves the clip
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
+        # the paper's open choices (docs/decisions.md "The paper's stage 2: every open choice measured")
+        delta_input: str = "soft",  # what the frozen interpolator reads of δ (models/keyin.py DELTA_INPUTS)
+        loss_reduction: str = "sum",  # what the β's weigh against (losses/soft_keyframe.py REDUCTIONS)
+        # a label-free optimisation aid the paper does not have: + w·H(δ) rewarded, w decaying linearly
+        # from entropy_bonus to 0 over entropy_bonus_steps training steps
+        entropy_bonus: float = 0.0,
+        entropy_bonus_steps: int = 0,
     ) -> None:
         super().__init__()
         if discovery not in KEYIN_RULES:
@@ -65,13 +72,22 @@ class KeyframeModule(L.LightningModule):
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
         if discovery == "boundaries" and not offset_evidence:
             raise ValueError("discovery='boundaries' needs offset_evidence (the boundary scores)")
+        if loss_reduction not in REDUCTIONS:
+            raise ValueError(f"loss_reduction must be one of {REDUCTIONS}, got {loss_reduction!r}")
+        if entropy_bonus < 0 or (entropy_bonus > 0 and entropy_bonus_steps < 1):
+            raise ValueError(
+                f"entropy_bonus must be >= 0 and, when > 0, decay over entropy_bonus_steps >= 1 steps; "
+                f"got {entropy_bonus} over {entropy_bonus_steps}"
+            )
         self.save_hyperparameters()
         frozen = InterpolatorModule(**stage1)
         predictor = KeyframePredictor(
             stage1["embed_dim"], n_keyframes, stage1["max_offset"], latent_dim, lstm_hidden, lstm_layers,
             attn_scale=attn_scale, offset_mode=offset_mode, fixed_offset=fixed_offset, offset_evidence=offset_evidence,
         )
-        self.model = KEYIN(frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"])
+        self.model = KEYIN(
+            frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"], delta_input=delta_input
+        )
         self.freeze_stage1()
 
     def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
@@ -106,7 +122,11 @@ class KeyframeModule(L.LightningModule):
             out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
             gaussian_kl(out["mu"], out["log_sigma"]), future_length, hp.beta_ke, hp.beta_ki, hp.beta_kl,
             hp.normalize_key_targets, pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
+            reduction=hp.loss_reduction, latent_dim=hp.latent_dim,
         )
+        if stage == "train" and hp.entropy_bonus > 0:  # an aid the paper does not have (docs/decisions.md)
+            weight = hp.entropy_bonus * max(0.0, 1.0 - self.global_step / hp.entropy_bonus_steps)
+            terms["loss"] = terms["loss"] - weight * offset_entropy(out["offset_probs"]).mean()
         if stage == "train" and hp.teacher_weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
             terms["teacher"] = teacher_loss(
                 self.model, clips, out, future_length, hp.teacher_keyframe_cost, hp.teacher_clips, hp.teacher_chain,

@@ -17,6 +17,12 @@ PROB_EPS = 1e-6
 """Clamp of BCE probabilities, coverage and ``c^t`` normalisers (REFERENCE §3.5, §8.12)."""
 IGNORE_OFFSET = -100
 """A keyframe without a teacher offset (``cross_entropy``'s ignore index)."""
+REDUCTIONS = ("sum", "per_frame", "per_pixel")
+"""How :func:`keyin_loss` reduces its terms, which sets what the β's weigh them against (the paper does
+not say; docs/decisions.md): "sum" BCE summed over pixels and frames, ``ℓ_ke`` over embedding dims,
+``ℓ_KL`` over latent dims; "per_frame" ``L_inter`` averaged over the clip's valid frames instead (the
+keyframe terms are already averaged over keyframes); "per_pixel" every term a mean per scalar: BCE over
+pixels and frames, ``ℓ_ke`` over embedding dims, ``ℓ_KL`` over latent dims."""
 
 
 def initial_position(batch: int, n_ext: int, like: Tensor) -> Tensor:
@@ -229,6 +235,8 @@ def keyin_loss(
     normalize_key_targets: bool = True,
     key_frames_pred: Tensor | None = None,
     pixel_weights: Tensor | None = None,
+    reduction: str = "sum",
+    latent_dim: int | None = None,
 ) -> dict[str, Tensor]:
     """KEYIN stage-2 loss ``L_key + L_inter`` (paper eq. 3-5, REFERENCE §3.6).
 
@@ -252,6 +260,8 @@ def keyin_loss(
         key_frames_pred: (B, M, D) decoded keyframes K̂^t as probabilities.
         pixel_weights: (B, N, D) weights of the future frames' pixels in ``L_inter``
             (keyin/losses/image.py); None: the plain BCE.
+        reduction: one of :data:`REDUCTIONS`; "sum" is the formula above.
+        latent_dim: Zk, the dims ``kl_per_key`` was summed over; needed by "per_pixel".
     Returns:
         ``loss`` (scalar); batch means ``key`` (L_key), ``key_emb``, ``kl``, ``inter`` (L_inter)
         and, if beta_ki > 0, ``key_img`` — the terms are c-weighted averages over keyframes and
@@ -259,6 +269,10 @@ def keyin_loss(
     """
     if beta_ki > 0 and key_frames_pred is None:
         raise ValueError("beta_ki > 0 needs key_frames_pred")
+    if reduction not in REDUCTIONS:
+        raise ValueError(f"reduction must be one of {REDUCTIONS}, got {reduction!r}")
+    if reduction == "per_pixel" and latent_dim is None:
+        raise ValueError("reduction='per_pixel' needs latent_dim (the KL's dims)")
     with torch.autocast(device_type=offset_probs.device.type, enabled=False):
         offset_probs = _at_least_float32(offset_probs)
         key_emb_pred = _at_least_float32(key_emb_pred)
@@ -277,6 +291,9 @@ def keyin_loss(
             keyframe_pos, lengths, future_emb, normalize_key_targets
         )
         key_emb_terms = ((key_emb_pred - emb_targets) ** 2).sum(-1)  # (B, M)
+        if reduction == "per_pixel":
+            key_emb_terms = key_emb_terms / key_emb_pred.shape[-1]
+            kl_per_key = kl_per_key / latent_dim
         per_key = beta_ke * key_emb_terms + beta_kl * kl_per_key
         terms = {"key_emb": key_emb_terms, "kl": kl_per_key}
         if beta_ki > 0:
@@ -284,12 +301,17 @@ def keyin_loss(
                 keyframe_pos, lengths, future_frames, normalize_key_targets
             )
             key_img_terms = bce_sum(_at_least_float32(key_frames_pred), img_targets)
+            if reduction == "per_pixel":
+                key_img_terms = key_img_terms / img_targets.shape[-1]
             per_key = per_key + beta_ki * key_img_terms
             terms["key_img"] = key_img_terms
         key_loss = (key_weights * per_key).sum(-1)  # (B,)
 
         mixed, coverage = soft_frames(frame_pos, inter_frames_pred, n_future)
         inter_loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future), pixel_weights).sum(-1)
+        if reduction != "sum":
+            per_scalar = future_frames.shape[-1] if reduction == "per_pixel" else 1
+            inter_loss = inter_loss / (lengths.to(inter_loss).clamp_min(1) * per_scalar)
 
         result = {name: (key_weights * term).sum(-1).mean() for name, term in terms.items()}
         result.update(

@@ -9,6 +9,7 @@ with another offset head (``KeyframePredictor.offset_mode``).
 from __future__ import annotations
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 
 from keyin.losses.soft_keyframe import argmax_frames
@@ -17,6 +18,28 @@ from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
+# What the frozen interpolator is told of each segment's offset in stage 2 (an open choice of the paper,
+# REFERENCE §9.1; docs/decisions.md): "soft" δ^t itself, "argmax" onehot(argmax δ^t) as the paper writes
+# (δ̂^t, "hat" = argmax) and as stage 1 trained on, "straight_through" that one-hot forward and δ^t's
+# gradient backward.
+DELTA_INPUTS = ("soft", "argmax", "straight_through")
+
+
+def interpolator_offsets(offset_probs: Tensor, delta_input: str) -> Tensor:
+    """The offset code the interpolator reads, (..., S), from the offset distributions (..., S).
+
+    Args:
+        offset_probs: δ, entry a the probability of offset a + 1.
+        delta_input: one of :data:`DELTA_INPUTS`.
+    """
+    if delta_input == "soft":
+        return offset_probs
+    hard = F.one_hot(offset_probs.argmax(-1), offset_probs.shape[-1]).to(offset_probs)
+    if delta_input == "argmax":
+        return hard
+    if delta_input == "straight_through":
+        return hard + offset_probs - offset_probs.detach()
+    raise ValueError(f"delta_input must be one of {DELTA_INPUTS}, got {delta_input!r}")
 
 
 class KEYIN(nn.Module):
@@ -26,6 +49,7 @@ class KEYIN(nn.Module):
         encoder, decoder, interpolator: stage 1's networks (frozen during stage 2).
         predictor: LSTM_cond, LSTM_inf with the attention posterior, LSTM_key and the offset head.
         n_cond: conditioning frames at the start of every clip.
+        delta_input: what the interpolator reads of δ (:data:`DELTA_INPUTS`).
     """
 
     def __init__(
@@ -35,10 +59,14 @@ class KEYIN(nn.Module):
         interpolator: Interpolator,
         predictor: KeyframePredictor,
         n_cond: int,
+        delta_input: str = "soft",
     ) -> None:
         super().__init__()
+        if delta_input not in DELTA_INPUTS:
+            raise ValueError(f"delta_input must be one of {DELTA_INPUTS}, got {delta_input!r}")
         self.encoder, self.decoder, self.interpolator, self.predictor = encoder, decoder, interpolator, predictor
         self.n_cond = n_cond
+        self.delta_input = delta_input
 
     def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
         """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""
@@ -81,15 +109,9 @@ class KEYIN(nn.Module):
             the frames interpolated after each keyframe's predecessor.
         """
         embeddings, keys = self.keyframes(clips, future_length, mode, sample)
-        starts = torch.cat([embeddings[:, self.n_cond - 1 : self.n_cond], keys.key_emb[:, :-1]], dim=1)  # (B, M, E)
-        n_clips, n_keys, max_offset = keys.offset_probs.shape
-        latent = torch.randn(
-            n_clips * n_keys, self.interpolator.latent_dim, device=clips.device
-        )  # stage 2 samples the interpolator latent from the prior (paper §3.2)
-        inter_emb = self.interpolator(
-            starts.flatten(0, 1), keys.key_emb.flatten(0, 1), keys.offset_probs.flatten(0, 1), latent
-        )  # (B·M, S, E)
-        frames = torch.sigmoid(self.decoder(inter_emb.flatten(0, 1)))  # (B·M·S, C, H, W)
+        frames = self.interpolate(
+            embeddings[:, self.n_cond - 1], keys.key_emb, interpolator_offsets(keys.offset_probs, self.delta_input)
+        )
         return {
             "key_emb": keys.key_emb,
             "offset_probs": keys.offset_probs,
@@ -100,8 +122,26 @@ class KEYIN(nn.Module):
             "future_emb": embeddings[:, self.n_cond :],
             "boundary_emb": embeddings[:, self.n_cond - 1 :],
             "boundary_scores": keys.boundary_scores,
-            "frames": frames.reshape(n_clips, n_keys, max_offset, -1),
+            "frames": frames,
         }
+
+    def interpolate(self, first: Tensor, key_emb: Tensor, offsets: Tensor) -> Tensor:
+        """The frames interpolated after each keyframe's predecessor, the interpolator's latent drawn
+        from its prior (stage 2 does so, paper §3.2; a deterministic interpolator has none).
+
+        Args:
+            first: (B, E) K^{e,0}, the last conditioning embedding.
+            key_emb: (B, M, E) keyframe embeddings.
+            offsets: (B, M, S) the offset code each segment's interpolation reads.
+        Returns:
+            (B, M, S, C·H·W) pixel probabilities.
+        """
+        starts = torch.cat([first[:, None], key_emb[:, :-1]], dim=1)  # (B, M, E)
+        n_clips, n_keys, max_offset = offsets.shape
+        latent = torch.randn(n_clips * n_keys, self.interpolator.latent_dim, device=key_emb.device)
+        inter_emb = self.interpolator(starts.flatten(0, 1), key_emb.flatten(0, 1), offsets.flatten(0, 1), latent)
+        frames = torch.sigmoid(self.decoder(inter_emb.flatten(0, 1)))  # (B·M·S, C, H, W)
+        return frames.reshape(n_clips, n_keys, max_offset, -1)
 
     def argmax_video(self, clips: Tensor, out: dict[str, Tensor | None]) -> Tensor:
         """(B, L, C, H, W): the conditioning frames, then the frames of the argmax offsets of ``out``
