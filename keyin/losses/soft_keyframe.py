@@ -216,6 +216,27 @@ def bce_sum(
     return per_frame
 
 
+def interpolation_loss(
+    frame_pos: Tensor, inter_frames_pred: Tensor, future_frames: Tensor, lengths: Tensor,
+    pixel_weights: Tensor | None = None,
+) -> tuple[Tensor, Tensor, Tensor]:
+    """``L_inter`` of each clip (eq. 4 with BCE): the summed BCE of the soft frames Ĩ_j, j < n_b.
+
+    Args:
+        frame_pos: (B, M, S, L_ext) from :func:`position_distributions`.
+        inter_frames_pred: (B, M, S, D) interpolated frames as probabilities.
+        future_frames: (B, N, D) ground truth in [0, 1].
+        lengths: (B,) valid future frames n_b.
+        pixel_weights: (B, N, D) or None.
+    Returns:
+        (B,) L_inter, and :func:`soft_frames`' mixture (B, N, D) and coverage (B, N).
+    """
+    n_future = future_frames.shape[1]
+    mixed, coverage = soft_frames(frame_pos, inter_frames_pred, n_future)
+    loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future), pixel_weights).sum(-1)
+    return loss, mixed, coverage
+
+
 def _at_least_float32(tensor: Tensor) -> Tensor:
     """Upcast half/bfloat16 to float32 and keep float64 (REFERENCE §3.8: mixed precision)."""
     return tensor if tensor.dtype in (torch.float32, torch.float64) else tensor.float()
@@ -307,8 +328,7 @@ def keyin_loss(
             terms["key_img"] = key_img_terms
         key_loss = (key_weights * per_key).sum(-1)  # (B,)
 
-        mixed, coverage = soft_frames(frame_pos, inter_frames_pred, n_future)
-        inter_loss = bce_sum(mixed, future_frames, valid_frame_mask(lengths, n_future), pixel_weights).sum(-1)
+        inter_loss, mixed, coverage = interpolation_loss(frame_pos, inter_frames_pred, future_frames, lengths, pixel_weights)
         if reduction != "sum":
             per_scalar = future_frames.shape[-1] if reduction == "per_pixel" else 1
             inter_loss = inter_loss / (lengths.to(inter_loss).clamp_min(1) * per_scalar)

@@ -10,7 +10,7 @@ import torch
 
 from keyin.lit import checkpoints
 from keyin import __version__
-from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_checkpoint
+from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_checkpoint, load_trained_module
 from keyin.lit.interpolator import InterpolatorModule
 from tests.cli.runner import error_line, last_json, run
 from tests.configs import OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
@@ -125,12 +125,33 @@ def test_stage2_without_a_stage1_checkpoint_names_the_fix(tmp_path):
     assert "train stage 1 first (stage=both or stage=interpolator) or pass interpolator_ckpt=" in result.stderr
 
 
+def test_the_papers_open_choices_train_on_the_stage_1_inside_a_stage_2_checkpoint(trained, tmp_path):
+    """Issue 43's options compose, train at scale=smoke on the stage 1 taken from a stage-2
+    checkpoint (whose weights stay as they were), and load back from their checkpoint."""
+    root, _ = trained
+    source = root / "run" / "checkpoints" / "keyframes" / "last.ckpt"
+    result = run("train", "scale=smoke", "backbone=ours", "model=keyin_paper", "stage=keyframes", "logger=none",
+                 "trainer.enable_progress_bar=false", f"interpolator_ckpt={source}", "hydra.run.dir=run",
+                 "model.keyframes.delta_input=straight_through", "model.keyframes.loss_reduction=per_pixel",
+                 "model.keyframes.entropy_bonus=0.5", "model.keyframes.entropy_bonus_steps=2", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    module, config = load_trained_module(tmp_path / "run" / "checkpoints" / "keyframes" / "last.ckpt")
+    assert config["model"]["name"] == "keyin_paper" and module.model.delta_input == "straight_through"
+    assert module.hparams.loss_reduction == "per_pixel" and module.hparams.entropy_bonus == 0.5
+    given = load_checkpoint(source)["state_dict"]
+    for name, value in module.model.interpolator.state_dict().items():
+        torch.testing.assert_close(value, given[f"model.interpolator.{name}"])
+
+
 def test_a_checkpoint_of_the_wrong_stage_is_refused(trained, tmp_path):
     root, _ = trained
+    checkpoint = torch.load(root / "run" / "checkpoints" / "keyframes" / "last.ckpt", weights_only=True)
+    torch.save(dict(checkpoint, keyin_stage="surprise"), tmp_path / "surprise.ckpt")
     result = run("train", "scale=smoke", "stage=keyframes", "logger=none",
-                 f"interpolator_ckpt={root}/run/checkpoints/keyframes/last.ckpt", cwd=tmp_path)
+                 f"interpolator_ckpt={tmp_path}/surprise.ckpt", cwd=tmp_path)
     assert result.returncode == 2
-    assert "is a 'keyframes' checkpoint but a 'interpolator' one is needed" in result.stderr
+    assert "surprise.ckpt is a 'surprise' checkpoint; stage 2 starts from the stage-1 checkpoint" in result.stderr
+    assert "or from the stage 1 inside a stage-2 checkpoint" in result.stderr
 
 
 def test_eval_of_a_stage1_checkpoint_scores_its_best_segmentation(trained):
