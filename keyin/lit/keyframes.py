@@ -24,13 +24,13 @@ from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights
 from keyin.losses.soft_keyframe import REDUCTIONS, argmax_positions, gaussian_kl, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
+from keyin.models.keyin import FROZEN_IN_STAGE2
 
 
 class KeyframeModule(L.LightningModule):
     """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``)."""
 
     stage = "keyframes"
-    frozen_by_design = "stage 2: stage 1's encoder, decoder and interpolator"
 
     def __init__(
         self,
@@ -64,6 +64,7 @@ class KeyframeModule(L.LightningModule):
         # from entropy_bonus to 0 over entropy_bonus_steps training steps
         entropy_bonus: float = 0.0,
         entropy_bonus_steps: int = 0,
+        frozen: str = "stage1",  # which stage-1 networks stage 2 freezes (models/keyin.py FROZEN_IN_STAGE2)
     ) -> None:
         super().__init__()
         if discovery not in KEYIN_RULES:
@@ -72,6 +73,8 @@ class KeyframeModule(L.LightningModule):
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
         if discovery == "boundaries" and not offset_evidence:
             raise ValueError("discovery='boundaries' needs offset_evidence (the boundary scores)")
+        if frozen not in FROZEN_IN_STAGE2:
+            raise ValueError(f"frozen must be one of {tuple(FROZEN_IN_STAGE2)}, got {frozen!r}")
         if loss_reduction not in REDUCTIONS:
             raise ValueError(f"loss_reduction must be one of {REDUCTIONS}, got {loss_reduction!r}")
         if entropy_bonus < 0 or (entropy_bonus > 0 and entropy_bonus_steps < 1):
@@ -98,8 +101,13 @@ class KeyframeModule(L.LightningModule):
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
         self.model.load_stage1(state_dict)
 
+    @property
+    def frozen_by_design(self) -> str:
+        """What stays frozen in eval mode while stage 2 trains (said once by keyin.lit.run)."""
+        return f"stage 2: stage 1's {', '.join(FROZEN_IN_STAGE2[self.hparams.frozen])}"
+
     def freeze_stage1(self) -> None:
-        self.model.freeze_stage1()
+        self.model.freeze_stage1(self.hparams.frozen)
 
     def train(self, mode: bool = True) -> "KeyframeModule":
         """Switch the trainable parts; stage 1 stays frozen in eval mode (REFERENCE §8.1)."""

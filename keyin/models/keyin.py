@@ -18,6 +18,13 @@ from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
+# What stage 2 freezes (an open choice: the paper writes "we freeze LSTM_inter weights and only use it to
+# backpropagate the error to the rest of the model"; REFERENCE §2.8 freezes all of stage 1):
+FROZEN_IN_STAGE2 = {
+    "stage1": ("encoder", "decoder", "interpolator"),  # everything stage 1 trained (our default)
+    "interpolator": ("interpolator",),  # MLP_init_inter and LSTM_inter; the encoder and decoder train on
+    "lstm_inter": ("interpolator.lstm",),  # LSTM_inter alone, as the paper's sentence reads
+}
 # What the frozen interpolator is told of each segment's offset in stage 2 (an open choice of the paper,
 # REFERENCE §9.1; docs/decisions.md): "soft" δ^t itself, "argmax" onehot(argmax δ^t) as the paper writes
 # (δ̂^t, "hat" = argmax) and as stage 1 trained on, "straight_through" that one-hot forward and δ^t's
@@ -74,10 +81,11 @@ class KEYIN(nn.Module):
             prefix = f"{name}."
             getattr(self, name).load_state_dict({k[len(prefix) :]: v for k, v in state_dict.items() if k.startswith(prefix)})
 
-    def freeze_stage1(self) -> None:
-        """No gradients into the stage-1 networks and eval mode for them; gradients still flow through."""
-        for name in STAGE1:
-            getattr(self, name).requires_grad_(False).eval()
+    def freeze_stage1(self, frozen: str = "stage1") -> None:
+        """No gradients into the stage-1 networks that ``frozen`` names (:data:`FROZEN_IN_STAGE2`) and
+        eval mode for them; gradients still flow through."""
+        for name in FROZEN_IN_STAGE2[frozen]:
+            self.get_submodule(name).requires_grad_(False).eval()
 
     def keyframes(
         self, clips: Tensor, future_length: Tensor, mode: str = "posterior", sample: bool = True, chain: Chain = "soft"

@@ -146,3 +146,24 @@ def test_old_checkpoints_load_with_the_papers_choices_as_they_ran():
     module_, _ = load_trained_module("pretrained:brownian")
     assert module_.model.delta_input == "soft"
     assert module_.hparams.get("loss_reduction", "sum") == "sum" and module_.hparams.get("entropy_bonus", 0.0) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("frozen", "trained", "still"),
+    [
+        ("stage1", ("predictor",), ("encoder", "decoder", "interpolator")),
+        ("interpolator", ("predictor", "encoder", "decoder"), ("interpolator",)),
+        ("lstm_inter", ("predictor", "encoder", "decoder", "interpolator.init_mlp"), ("interpolator.lstm",)),
+    ],
+)
+def test_stage_2_trains_what_it_does_not_freeze(frozen, trained, still):
+    built = module(frozen=frozen).train()
+    built._shared_step(batch(), "train")["loss"].backward()
+    for name in trained:
+        part = built.model.get_submodule(name)
+        assert part.training and any(p.grad is not None and p.grad.abs().sum() > 0 for p in part.parameters()), name
+    for name in still:
+        part = built.model.get_submodule(name)
+        assert not part.training and all(p.grad is None and not p.requires_grad for p in part.parameters()), name
+    with pytest.raises(ValueError, match="frozen must be one of"):
+        module(frozen="decoder")
