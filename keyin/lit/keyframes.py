@@ -64,6 +64,7 @@ class KeyframeModule(L.LightningModule):
         # from entropy_bonus to 0 over entropy_bonus_steps training steps
         entropy_bonus: float = 0.0,
         entropy_bonus_steps: int = 0,
+        gumbel_offsets: bool = False,  # an aid the paper does not have (models/keyin.py)
         frozen: str = "stage1",  # which stage-1 networks stage 2 freezes (models/keyin.py FROZEN_IN_STAGE2)
     ) -> None:
         super().__init__()
@@ -89,7 +90,8 @@ class KeyframeModule(L.LightningModule):
             attn_scale=attn_scale, offset_mode=offset_mode, fixed_offset=fixed_offset, offset_evidence=offset_evidence,
         )
         self.model = KEYIN(
-            frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"], delta_input=delta_input
+            frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"], delta_input=delta_input,
+            gumbel_offsets=gumbel_offsets,
         )
         self.freeze_stage1()
 

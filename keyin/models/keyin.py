@@ -57,6 +57,9 @@ class KEYIN(nn.Module):
         predictor: LSTM_cond, LSTM_inf with the attention posterior, LSTM_key and the offset head.
         n_cond: conditioning frames at the start of every clip.
         delta_input: what the interpolator reads of δ (:data:`DELTA_INPUTS`).
+        gumbel_offsets: (an aid the paper does not have) in training, the posterior forward's δ is a
+            straight-through Gumbel-softmax sample of the offset logits: one-hot forward, so the soft
+            loss scores one sampled segmentation per clip, and the relaxed sample's gradient backward.
     """
 
     def __init__(
@@ -67,6 +70,7 @@ class KEYIN(nn.Module):
         predictor: KeyframePredictor,
         n_cond: int,
         delta_input: str = "soft",
+        gumbel_offsets: bool = False,
     ) -> None:
         super().__init__()
         if delta_input not in DELTA_INPUTS:
@@ -74,6 +78,7 @@ class KEYIN(nn.Module):
         self.encoder, self.decoder, self.interpolator, self.predictor = encoder, decoder, interpolator, predictor
         self.n_cond = n_cond
         self.delta_input = delta_input
+        self.gumbel_offsets = gumbel_offsets
 
     def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
         """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""
@@ -117,6 +122,8 @@ class KEYIN(nn.Module):
             the frames interpolated after each keyframe's predecessor.
         """
         embeddings, keys = self.keyframes(clips, future_length, mode, sample)
+        if self.gumbel_offsets and self.training and mode == "posterior":
+            keys = keys._replace(offset_probs=F.gumbel_softmax(keys.offset_logits, hard=True))
         frames = self.interpolate(
             embeddings[:, self.n_cond - 1], keys.key_emb, interpolator_offsets(keys.offset_probs, self.delta_input)
         )

@@ -167,3 +167,19 @@ def test_stage_2_trains_what_it_does_not_freeze(frozen, trained, still):
         assert not part.training and all(p.grad is None and not p.requires_grad for p in part.parameters()), name
     with pytest.raises(ValueError, match="frozen must be one of"):
         module(frozen="decoder")
+
+
+def test_gumbel_offsets_sample_one_hot_offsets_in_training_and_keep_the_softmax_otherwise():
+    built, data = module(gumbel_offsets=True), batch()
+    model = built.train().model
+    torch.manual_seed(0)
+    out = model(data["frames"], data["future_length"])
+    probs = out["offset_probs"]
+    torch.testing.assert_close(probs.max(-1).values, torch.ones(3, 3))  # one-hot forward
+    assert probs.requires_grad
+    torch.testing.assert_close(probs.sum(-1), torch.ones(3, 3))
+    draws = {tuple(model(data["frames"], data["future_length"])["offset_probs"].argmax(-1).flatten().tolist()) for _ in range(5)}
+    assert len(draws) > 1  # a new sample each step
+    with torch.no_grad():
+        evaluated = model.eval()(data["frames"], data["future_length"], sample=False)
+    torch.testing.assert_close(evaluated["offset_probs"], torch.softmax(evaluated["offset_logits"], -1))
