@@ -16,7 +16,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import config_choice, finished_metrics, keyin_main, run_dir, user_errors, write_metrics
-from keyin.cli.checks import check_common, check_training
+from keyin.cli.checks import check_common, check_training, is_two_stage
 from keyin.cli.tracking import job_logger
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.errors import CheckpointError
@@ -86,6 +86,7 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
     datamodule = lambda batch_size: ClipDataModule(  # noqa: E731
         clips("train", None), clips("val", scale.val_clips), batch_size, cfg.num_workers
     )
+    test = clips("test", scale.eval_clips) if scores_test_split(cfg) else None  # its files checked before training
     common = dict(
         run_dir=folder,
         val_every=scale.val_every,
@@ -110,12 +111,17 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
     times = {"train_seconds": round(time.perf_counter() - started, 1), "threads": torch.get_num_threads()}
     started = time.perf_counter()
     if discoverers:
-        metrics = score_methods(discoverers, clips("test", scale.eval_clips), dataset.n_cond, dataset.n_future, folder)
+        metrics = score_methods(discoverers, test, dataset.n_cond, dataset.n_future, folder)
     elif hasattr(module, "test_metrics"):  # a model without keyframes scores itself (TAP)
-        metrics = dict(module.test_metrics(clips("test", scale.eval_clips), folder), method=cfg.model.name)
+        metrics = dict(module.test_metrics(test, folder), method=cfg.model.name)
     else:
         return None
     return record_metrics(dict(metrics, **times, score_seconds=round(time.perf_counter() - started, 1)), cfg, folder)
+
+
+def scores_test_split(cfg: DictConfig) -> bool:
+    """Whether the run ends by scoring the test split: ``evaluate``, unless it trains stage 1 only."""
+    return bool(cfg.evaluate) and not (is_two_stage(cfg.model) and cfg.stage == "interpolator")
 
 
 def record_metrics(metrics: dict, cfg: DictConfig, folder: Path) -> dict:

@@ -17,7 +17,7 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset
 
-from keyin.data.hdf5 import ShardInfo, check_compatible, inspect_shard
+from keyin.data.hdf5 import ShardInfo, check_compatible, check_frame_values, inspect_shard
 from keyin.errors import DatasetFormatError
 
 
@@ -57,7 +57,12 @@ class GeneratedClips(Dataset):
 
 
 class ShardClips(Dataset):
-    """Clips read lazily from validated HDF5 shards; each worker opens its own file handles."""
+    """Clips read lazily from validated HDF5 shards; each worker opens its own file handles.
+
+    Every command that reads keyin's HDF5 (keyin-eval, -train, -figures, -report; ``data=`` files and
+    dataset folders alike) reads it here, so the layout, the sizes and a sample of each shard's values
+    are checked here, before any model sees a frame.
+    """
 
     def __init__(
         self,
@@ -69,6 +74,7 @@ class ShardClips(Dataset):
         self.infos: list[ShardInfo] = [inspect_shard(Path(p)) for p in paths]
         for info in self.infos:
             check_compatible(info, image_shape, n_cond, n_future)
+        check_frame_values(self.infos)
         self.n_cond, self.n_future = n_cond, n_future
         self.offsets = np.cumsum([0] + [info.n for info in self.infos])
         if self.offsets[-1] == 0:

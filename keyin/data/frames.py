@@ -2,7 +2,10 @@
 
 Values: uint8 (and other integer) frames are 0-255, bool frames 0/1, float frames lie in [0, 1].
 Integer frames whose largest value is 1 are refused, since they are almost surely 0/1 images that
-would import as black, unless ``binary`` says they are (then 0/1 becomes 0/255).
+would look black, unless ``binary`` says they are (then 0/1 becomes 0/255). Frames that are one
+value throughout are blank. These rules are shared by keyin-import and keyin-discover (videos) and
+by every reader of keyin's HDF5 shards (:func:`keyin.data.hdf5.check_frame_values`); each names its
+own fix.
 """
 
 from __future__ import annotations
@@ -15,6 +18,10 @@ from PIL import Image
 from keyin.errors import DatasetFormatError
 
 CHANNELS = (1, 3)  # grey or RGB; a fourth (alpha) channel is dropped
+# How videos of 0/1 frames are fixed (keyin-import and keyin-discover have binary=)
+VIDEO_ZERO_ONE_FIX = "store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true to scale 0/1 to 0/255"
+# The usual cause of blank frames and its fix
+BLANK_FIX = "float frames in [0, 1] cast to uint8 become 0: store np.round(frames * 255).astype(np.uint8) instead"
 
 
 def prepare_video(
@@ -47,12 +54,29 @@ def prepare_video(
         kept.append(fit_frame(frame, image_size, channels))
     if count == 0:
         raise DatasetFormatError(f"{where} has zero frames; remove it from the source or pass a video with frames")
-    if high == 1 and not binary:
-        raise DatasetFormatError(
-            f"{where} holds {dtype} frames whose largest value is 1: 0/1 images would import as black; "
-            f"store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true to scale 0/1 to 0/255"
-        )
+    if not binary:
+        check_zero_one(dtype, high, where, VIDEO_ZERO_ONE_FIX)
     return np.stack(kept), count, shape
+
+
+def check_zero_one(dtype: np.dtype, high: int, where: str, fix: str) -> None:
+    """Refuse integer frames whose largest value ``high`` is 1: 0/1 images, black on the 0-255 scale.
+
+    Args:
+        dtype: the frames' dtype as stored.
+        where: how the error names the frames.
+        fix: what the error tells to do (it depends on who reads the frames).
+    """
+    if np.issubdtype(dtype, np.integer) and high == 1:
+        raise DatasetFormatError(
+            f"{where} holds {dtype} frames whose largest value is 1: 0/1 images look black on keyin's 0-255 scale; "
+            f"{fix}"
+        )
+
+
+def is_blank(frames: np.ndarray) -> bool:
+    """Whether ``frames`` (a clip or a video, any shape) are one value throughout: they show nothing."""
+    return bool(frames.min() == frames.max())
 
 
 def as_uint8(frame: np.ndarray, where: str, binary: bool) -> tuple[np.ndarray, int]:

@@ -21,12 +21,13 @@ import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import h5py
 import numpy as np
 
 from keyin import __version__
+from keyin.data.frames import BLANK_FIX, check_zero_one, is_blank
 from keyin.errors import DatasetFormatError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.paths import inside
@@ -35,6 +36,14 @@ FORMAT_VERSION = 1
 MANIFEST_NAME = "manifest.json"
 REQUIRED_ATTRS = ("format_version", "generator", "config", "seed", "split", "n_cond")
 IMPORT_GENERATOR = "keyin-import"  # the ``generator`` of shards that keyin-import wrote from videos
+SAMPLE_CLIPS = 8  # clips per shard whose values a reader checks (spread over the file; 1-6 ms a shard)
+# How a shard of 0/1 frames is fixed
+SHARD_ZERO_ONE_FIX = "write the file again with frames * 255, or import the 0/1 frames with keyin-import binary=true"
+# How a shard of frames of another dtype is fixed
+SHARD_DTYPE_FIX = (
+    "store frames as uint8 0-255 (float frames in [0, 1]: np.round(frames * 255).astype(np.uint8)), or import "
+    "them with keyin-import, which converts float frames in [0, 1]"
+)
 
 
 def write_shard(path: Path, arrays: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> str:
@@ -118,9 +127,14 @@ def inspect_shard(path: Path) -> ShardInfo:
             if name not in handle:
                 raise DatasetFormatError(f"{path} has no '{name}' dataset; it is not a keyin shard")
         frames = handle["frames"]
-        if frames.dtype != np.uint8 or frames.ndim != 5:
+        if frames.ndim != 5:
             raise DatasetFormatError(
                 f"{path}: 'frames' must be uint8 (n, L, H, W, C), found {frames.dtype} {frames.shape}"
+            )
+        if frames.dtype != np.uint8:
+            raise DatasetFormatError(
+                f"{path} holds {frames.dtype} frames{first_clip_range(frames)}, but keyin's HDF5 format stores uint8 "
+                f"0-255; {SHARD_DTYPE_FIX}"
             )
         n, clip_length = frames.shape[:2]
         for name, dataset in handle.items():
@@ -166,6 +180,49 @@ def check_compatible(
         problems.append(f"clip length {info.clip_length} < n_cond + n_future = {n_cond + n_future}")
     if problems:
         raise DatasetFormatError(f"{info.path} does not match the dataset config: {'; '.join(problems)}; {mismatch_fix(info)}")
+
+
+def first_clip_range(frames: h5py.Dataset) -> str:
+    """`` in [low, high]``, the values of the first clip of numeric frames; empty for others."""
+    if not len(frames) or not np.issubdtype(frames.dtype, np.number):
+        return ""
+    clip = frames[0]
+    return f" in [{clip.min():g}, {clip.max():g}]"
+
+
+def sample_rows(n: int) -> list[int]:
+    """Up to :data:`SAMPLE_CLIPS` clip indices spread evenly over ``range(n)``, the first and last included."""
+    return sorted({round(float(i)) for i in np.linspace(0, n - 1, min(n, SAMPLE_CLIPS))})
+
+
+def check_frame_values(infos: Sequence[ShardInfo]) -> None:
+    """Refuse shards of 0/1 frames, or files of blank clips only, by :mod:`keyin.data.frames`' rules.
+
+    Only each shard's :func:`sample_rows` are read, so a 100 000-clip split costs milliseconds per
+    shard. A blank clip, even a shard of them, is data (an imported video's black stretch can fill a
+    shard); files whose every checked clip is blank are a failed conversion, e.g. float frames cast to
+    uint8, and are refused together.
+    """
+    checked, blank = 0, []
+    for info in infos:
+        clips = sample_clips(info)
+        check_zero_one(clips.dtype, int(clips.max(initial=0)), f"{info.path} ({len(clips)} of {info.n} clips checked)",
+                       SHARD_ZERO_ONE_FIX)
+        checked += len(clips)
+        blank += [clip.flat[0] for clip in clips if is_blank(clip)]
+    if checked and len(blank) == checked:
+        files = str(infos[0].path) if len(infos) == 1 else f"{infos[0].path} and {len(infos) - 1} more"
+        raise DatasetFormatError(
+            f"{files}: all {checked} clips checked (of {sum(info.n for info in infos)}) are blank, each one value "
+            f"throughout (e.g. {blank[0]}); {BLANK_FIX} and write the file again"
+        )
+
+
+def sample_clips(info: ShardInfo) -> np.ndarray:
+    """The frames (k, L, H, W, C) of a shard's :func:`sample_rows`."""
+    with h5py.File(info.path, "r") as handle:
+        frames = handle["frames"]  # one read per clip: h5py's list indexing is over 10x slower
+        return np.stack([frames[row] for row in sample_rows(info.n)]) if info.n else frames[:0]
 
 
 def mismatch_fix(info: ShardInfo) -> str:

@@ -26,7 +26,7 @@ from typing import Any, Mapping
 import numpy as np
 from rich.progress import Progress
 
-from keyin.data.frames import prepare_video
+from keyin.data.frames import BLANK_FIX, is_blank, prepare_video
 from keyin.data.generate import plan_shards
 from keyin.data.hdf5 import IMPORT_GENERATOR, load_arrays, read_manifest, split_files, write_manifest, write_shard
 from keyin.data.labels import check_known, check_video_labels, read_labels
@@ -185,9 +185,9 @@ def read_videos(
     verb: str = "importing",
     key: str = "source",
 ) -> tuple[list[ImportedVideo], list[str], list[str]]:
-    """Decode and fit every video of ``source``; returns those long enough for a clip, why each
+    """Decode, check and fit every video of ``source``; returns those long enough for a clip, why each
     other one was skipped, and every video id seen (``verb`` names the work in the progress bar,
-    ``key`` the setting that named the source in the errors)."""
+    ``key`` the setting that named the source in the errors). A source of blank videos only is refused."""
     videos, skipped, seen = [], [], []
     with Progress(disable=not progress) as bar:
         task = bar.add_task(f"{verb} {source}", total=None)
@@ -211,7 +211,20 @@ def read_videos(
                     f"dataset.n_cond + min_future = {spec.n_cond + spec.min_future}"
                 )
             bar.update(task, advance=1)
+    check_not_all_blank(videos, source)
     return videos, skipped, seen
+
+
+def check_not_all_blank(videos: list[ImportedVideo], source: Path) -> None:
+    """Refuse a source whose every video is blank (one value throughout). One blank video among others
+    is kept: a black or covered-camera recording is data; a source of nothing but blank videos is a
+    failed conversion (or the wrong camera) and would give a model nothing to find."""
+    if videos and all(is_blank(video.frames) for video in videos):
+        first = videos[0]
+        raise DatasetFormatError(
+            f"every video of {source} is blank (e.g. {first.where} is {first.frames.flat[0]} throughout); {BLANK_FIX}, "
+            f"or pass videos that show something"
+        )
 
 
 def write_splits(

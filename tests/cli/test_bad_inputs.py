@@ -16,14 +16,14 @@ from keyin.cli.app import fail_if_refused
 from keyin.data import hdf5
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.generate import generate_dataset
-from keyin.io import TEMPORARY_TAG
+from keyin.io import TEMPORARY_TAG, sha256_of
 from tests.cli.runner import error_line, last_json, run
 from tests.faults import fill_disk_on, make_read_only, refuse
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    """A good Brownian test split and broken variants of its shard and of a checkpoint."""
+    """A good Brownian test split, broken variants of its shard (alone and as dataset folders) and of a checkpoint."""
     root = tmp_path_factory.mktemp("files")
     generate_dataset(BrownianGenerator(), root / "good" / "brownian", "brownian", {"test": 4}, 4, 0, progress=False)
     shard = root / "good" / "brownian" / "test-00000.h5"
@@ -43,8 +43,48 @@ def files(tmp_path_factory):
     (root / "garbage.ckpt").write_bytes(b"not a checkpoint")
     torch.save({"state_dict": {}}, root / "plain.ckpt")
     (root / "no_dataset").mkdir()
+    good = hdf5.load_arrays(shard)["frames"]  # 0/255
+    bad_frames = {"zero_one": good // 255, "float": good.astype(np.float32), "blank": np.zeros_like(good)}
+    for name, frames in bad_frames.items():
+        dataset_of(root / name, with_frames(shard, root / f"{name}.h5", frames))
+    dataset_of(root / "trainable", shard)
+    dataset_of(root / "bad_test", shard, test=root / "zero_one.h5")
+    small = np.random.default_rng(0).integers(0, 256, (4, 35, 16, 16, 1), dtype=np.uint8)
+    with_frames(shard, root / "small.h5", small)
     return root
 
+
+def with_frames(shard, path, frames):
+    """A copy of ``shard`` at ``path`` whose frames are ``frames``, written by h5py as a user's own script would."""
+    shutil.copy(shard, path)
+    with h5py.File(path, "a") as handle:
+        del handle["frames"]
+        handle["frames"] = frames
+    return path
+
+
+def dataset_of(folder, shard, test=None):
+    """``folder/brownian``: a dataset whose train, val and test splits are each a copy of ``shard`` (the test
+    split of ``test`` if given)."""
+    target = folder / "brownian"
+    target.mkdir(parents=True)
+    entries = {}
+    for split, source in (("train", shard), ("val", shard), ("test", test or shard)):
+        shutil.copy(source, target / f"{split}-00000.h5")
+        entries[split] = [{"file": f"{split}-00000.h5", "n": 4, "sha256": sha256_of(target / f"{split}-00000.h5")}]
+    hdf5.write_manifest(target, "brownian", entries, {})
+
+
+# The frame rows' messages ({file}: the bad file in the fixture's folder).
+ZERO_ONE = "{{files}}/{file} (4 of 4 clips checked) holds uint8 frames whose largest value is 1: 0/1 images look black"
+ZERO_ONE_FIX = "write the file again with frames * 255, or import the 0/1 frames with keyin-import binary=true"
+FLOAT = "{{files}}/{file} holds float32 frames in [0, 255], but keyin's HDF5 format stores uint8 0-255"
+FLOAT_FIX = "store frames as uint8 0-255 (float frames in [0, 1]: np.round(frames * 255).astype(np.uint8))"
+BLANK = "{{files}}/{file}: all 4 clips checked (of 4) are blank, each one value throughout (e.g. 0)"
+BLANK_FIX = "float frames in [0, 1] cast to uint8 become 0: store np.round(frames * 255).astype(np.uint8) instead"
+FILE_TRAINING = ["scale=smoke", "dataset.train_source=files"]  # Brownian clips read from data_dir's shards
+TRAIN_SPLIT = [*FILE_TRAINING, "evaluate=false"]  # the train split's files (with evaluate, the test split's come first)
+FIGURE = ["figure=fig5", "ckpt=pretrained:brownian"]
 
 # id, command, overrides ({files} is the fixture's folder), the problem named, the fix named.
 BAD_INPUTS = [
@@ -91,6 +131,37 @@ BAD_INPUTS = [
     ("wrong-channels", "eval", ["model=random", "dataset.channels=3", "data={files}/good/brownian/test-00000.h5"],
      "image (H, W, C) (32, 32, 1) != config (32, 32, 3)", "pick the matching dataset= option"),
     ("empty-file", "eval", ["model=random", "data={files}/empty.h5"], "no clips in", "generate some with `keyin-generate`"),
+    # frame values and sizes: every reader of keyin's HDF5 checks them (in keyin.data.clips.ShardClips)
+    ("zero-one-frames", "eval", ["model=random", "data={files}/zero_one.h5"], ZERO_ONE.format(file="zero_one.h5"),
+     ZERO_ONE_FIX),
+    ("zero-one-frames-trained-model", "eval", ["ckpt=pretrained:brownian", "data={files}/zero_one.h5"],
+     ZERO_ONE.format(file="zero_one.h5"), ZERO_ONE_FIX),
+    ("zero-one-dataset", "eval", ["model=random", "data_dir={files}/zero_one"],
+     ZERO_ONE.format(file="zero_one/brownian/test-00000.h5"), ZERO_ONE_FIX),
+    ("zero-one-train", "train", [*TRAIN_SPLIT, "data_dir={files}/zero_one"],
+     ZERO_ONE.format(file="zero_one/brownian/train-00000.h5"), ZERO_ONE_FIX),
+    ("zero-one-test-split-before-training", "train", [*FILE_TRAINING, "data_dir={files}/bad_test"],
+     ZERO_ONE.format(file="bad_test/brownian/test-00000.h5"), ZERO_ONE_FIX),
+    ("zero-one-figures", "figures", [*FIGURE, "data={files}/zero_one.h5"], ZERO_ONE.format(file="zero_one.h5"),
+     ZERO_ONE_FIX),
+    ("float-frames", "eval", ["model=random", "data={files}/float.h5"], FLOAT.format(file="float.h5"), FLOAT_FIX),
+    ("float-dataset", "eval", ["model=random", "data_dir={files}/float"],
+     FLOAT.format(file="float/brownian/test-00000.h5"), FLOAT_FIX),
+    ("float-train", "train", [*TRAIN_SPLIT, "data_dir={files}/float"],
+     FLOAT.format(file="float/brownian/train-00000.h5"), FLOAT_FIX),
+    ("float-figures", "figures", [*FIGURE, "data={files}/float.h5"], FLOAT.format(file="float.h5"), FLOAT_FIX),
+    ("blank-clips", "eval", ["model=random", "data={files}/blank.h5"], BLANK.format(file="blank.h5"), BLANK_FIX),
+    ("blank-dataset", "eval", ["model=random", "data_dir={files}/blank"],
+     BLANK.format(file="blank/brownian/test-00000.h5"), BLANK_FIX),
+    ("blank-train", "train", [*TRAIN_SPLIT, "data_dir={files}/blank"],
+     BLANK.format(file="blank/brownian/train-00000.h5"), BLANK_FIX),
+    ("blank-figures", "figures", [*FIGURE, "data={files}/blank.h5"], BLANK.format(file="blank.h5"), BLANK_FIX),
+    ("wrong-size-train", "train", [*TRAIN_SPLIT, "dataset.channels=3", "data_dir={files}/trainable"],
+     "{files}/trainable/brownian/train-00000.h5 does not match the dataset config: image (H, W, C) (32, 32, 1) != config "
+     "(32, 32, 3)", "pick the matching dataset= option"),
+    ("wrong-size-figures", "figures", [*FIGURE, "data={files}/small.h5"],
+     "{files}/small.h5 does not match the dataset config: image (H, W, C) (16, 16, 1) != config (32, 32, 1)",
+     "pick the matching dataset= option"),
     ("empty-train-split", "train", ["scale=smoke", "dataset.splits.train=2"],
      "the train split has 2 clips, fewer than one batch of 4", "lower scale.batch_size"),
     ("missing-checkpoint", "eval", ["ckpt={files}/nope.ckpt"], "nope.ckpt does not exist", "pass the path of a keyin checkpoint"),
@@ -104,11 +175,11 @@ BAD_INPUTS = [
 
 
 def half_written(root):
-    """Files a failed command must not leave: temporaries of atomic writes, results."""
-    return sorted(p for p in root.rglob("*") if TEMPORARY_TAG in p.name or p.name == "metrics.json")
+    """Files a failed command must not leave: temporaries of atomic writes, results, checkpoints."""
+    return sorted(p for p in root.rglob("*") if TEMPORARY_TAG in p.name or p.name == "metrics.json" or p.suffix == ".ckpt")
 
 
-QUIET = {"eval": "progress=false", "generate": "progress=false", "train": "logger=none"}
+QUIET = {"eval": "progress=false", "generate": "progress=false", "train": "logger=none", "figures": "n=1"}
 
 
 @pytest.mark.parametrize("command,overrides,problem,fix",
@@ -116,7 +187,7 @@ QUIET = {"eval": "progress=false", "generate": "progress=false", "train": "logge
 def test_bad_input_gives_one_error_line(files, tmp_path, command, overrides, problem, fix):
     overrides = [o.replace("{files}", str(files)) for o in overrides]
     line = error_line(run(command, *overrides, QUIET[command], cwd=tmp_path))
-    assert problem in line and fix in line
+    assert problem.replace("{files}", str(files)) in line and fix in line
     assert half_written(tmp_path) == [] and not (tmp_path / "data").exists()
 
 
@@ -164,3 +235,14 @@ def test_a_log_file_hydra_cannot_open_in_a_read_only_run_dir(capsys):
         "error: Read-only file system (run/train.log); choose a writable folder with hydra.run.dir= "
         "(the run dir) or data_dir= (datasets)\n")
     fail_if_refused(ValueError("a bug, not the file system"))  # returns: the caller re-raises it
+
+
+@pytest.mark.parametrize("command,overrides", [
+    ("eval", ["model=random", "data={files}/good/brownian/test-00000.h5"]),
+    ("eval", ["ckpt=pretrained:brownian", "data_dir={files}/trainable"]),
+    ("figures", [*FIGURE, "data={files}/good/brownian/test-00000.h5", "k=1"]),
+], ids=["eval-file", "eval-dataset-trained-model", "figures"])
+def test_the_good_files_beside_the_bad_ones_pass_the_frame_checks(files, tmp_path, command, overrides):
+    overrides = [o.replace("{files}", str(files)) for o in overrides]
+    result = run(command, *overrides, QUIET[command], cwd=tmp_path)
+    assert result.returncode == 0 and "error:" not in result.stderr, result.stderr[-2000:]

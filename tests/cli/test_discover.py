@@ -12,7 +12,7 @@ import torch
 from keyin.lit.checkpoints import STAGE_KEY
 from tests.checkpoints import untrained_checkpoint
 from tests.cli.runner import error_line, last_json, run
-from tests.videos import EVENTS, FPS, frames, write_video
+from tests.videos import EVENTS, FPS, frames, write_robomimic, write_video
 
 SIZES = ("dataset=custom", "dataset.image_size=16", "dataset.channels=1", "dataset.n_future=10")  # n_cond 2
 FILES = ["annotated.gif", "contact_sheet.png", "keyframes.json", "timeline.png"]
@@ -71,6 +71,9 @@ def bad(root):
     (root / "cut.mp4").write_bytes(good[: len(good) // 4])
     np.save(root / "empty.npy", np.zeros((0, 16, 16, 1), np.uint8))
     np.save(root / "masks.npy", (frames(20) > 100).astype(np.uint8))
+    write_robomimic(root / "masks.hdf5", [(frames(20) > 100).astype(np.uint8)])
+    write_robomimic(root / "float.hdf5", [frames(20).astype(np.float32)])  # 0-255 floats
+    write_robomimic(root / "blank.hdf5", [np.zeros((20, 24, 32, 3), np.uint8)] * 2)
     torch.save({STAGE_KEY: "interpolator", "state_dict": {}}, root / "stage1.ckpt")
     untrained_checkpoint(root / "paper.ckpt", *SIZES, "model=keyin")  # the paper's KEYIN: no boundary scores
     return root
@@ -81,8 +84,15 @@ BAD_INPUTS = [
     ("text-as-mp4", ["input=text.mp4"], "text.mp4 is not a readable video"),
     ("corrupt-mp4", ["input=cut.mp4"], "cut.mp4 is not a readable video"),
     ("zero-frames", ["input=empty.npy"], "empty.npy has zero frames; remove it from the source"),
-    ("frames-0-1", ["input=masks.npy"], "masks.npy holds uint8 frames whose largest value is 1: 0/1 images would "
-     "import as black; store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true"),
+    ("frames-0-1", ["input=masks.npy"], "masks.npy holds uint8 frames whose largest value is 1: 0/1 images look "
+     "black on keyin's 0-255 scale; store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true"),
+    ("hdf5-frames-0-1", ["input=masks.hdf5"], "masks.hdf5 (video masks.hdf5[demo_0]) holds uint8 frames whose largest "
+     "value is 1: 0/1 images look black on keyin's 0-255 scale; store them as 0/255 (frames * 255)"),
+    ("hdf5-float-0-255", ["input=float.hdf5"], "float.hdf5 (video float.hdf5[demo_0]): float frames must lie in [0, 1], "
+     "but a frame holds values in [10, 10]; divide 0-255 frames by 255"),
+    ("hdf5-all-blank", ["input=blank.hdf5"], "every video of blank.hdf5 is blank (e.g. blank.hdf5 (video "
+     "blank.hdf5[demo_0]) is 0 throughout); float frames in [0, 1] cast to uint8 become 0: store "
+     "np.round(frames * 255).astype(np.uint8) instead, or pass videos that show something"),
     ("missing-input", ["input=nope"], "input nope does not exist; pass input=<"),
     ("missing-checkpoint", ["ckpt=nope.ckpt"], "checkpoint nope.ckpt does not exist; pass the path of a keyin checkpoint"),
     ("stage-1-checkpoint", ["ckpt=stage1.ckpt"], "stage1.ckpt is a 'interpolator' checkpoint but a 'keyframes' one is needed"),

@@ -98,7 +98,7 @@ def test_keyin_generate_of_the_custom_dataset_points_to_keyin_import(tmp_path):
 def test_0_1_uint8_frames_stop_the_import_unless_binary_is_set(tmp_path):
     np.save(tmp_path / "masks.npy", (frames(20) > 100).astype(np.uint8))
     line = error_line(run("import_videos", "source=masks.npy", *SIZES, "progress=false", cwd=tmp_path))
-    assert "largest value is 1: 0/1 images would import as black" in line and "binary=true" in line
+    assert "largest value is 1: 0/1 images look black on keyin's 0-255 scale" in line and "binary=true" in line
     result = run("import_videos", "source=masks.npy", *SIZES, "binary=true", "fractions={train: 1, val: 0, test: 0}",
                  "progress=false", cwd=tmp_path)
     assert result.returncode == 0, result.stderr

@@ -9,7 +9,9 @@ import pytest
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.clips import ShardClips
 from keyin.data.generate import generate_dataset
-from keyin.data.hdf5 import check_compatible, inspect_shard, load_arrays, split_files, write_shard
+from keyin.data.hdf5 import (
+    SAMPLE_CLIPS, check_compatible, check_frame_values, inspect_shard, load_arrays, sample_rows, split_files, write_shard,
+)
 from keyin.errors import DatasetFormatError, UnsafePathError
 from keyin.io import sha256_of
 
@@ -168,3 +170,62 @@ def test_a_manifest_naming_a_file_outside_its_folder_is_refused(tmp_path, name):
     with pytest.raises(UnsafePathError, match="outside"):  # and generation does not touch it
         generate_dataset(BrownianGenerator(), folder, dataset="brownian", splits={"test": 2}, shard_size=2, seed=0,
                          progress=False)
+
+
+def shard_of(path, frames):
+    """A shard of the given (n, 6, 8, 8, 1) uint8 frames, otherwise like :func:`arrays`'."""
+    write_shard(path, {**arrays(n=len(frames)), "frames": frames}, ATTRS)
+    return path
+
+
+def test_the_values_checked_are_a_few_clips_spread_over_the_file():
+    assert sample_rows(0) == [] and sample_rows(1) == [0] and sample_rows(3) == [0, 1, 2]
+    rows = sample_rows(100_000)
+    assert len(rows) == SAMPLE_CLIPS and rows[0] == 0 and rows[-1] == 99_999 and rows == sorted(set(rows))
+
+
+def test_a_shard_of_0_1_frames_is_refused_naming_the_file_and_the_fix(tmp_path):
+    zero_one = arrays(n=20)["frames"] // 128  # 0/1 images
+    path = shard_of(tmp_path / "masks.h5", zero_one)
+    with pytest.raises(DatasetFormatError) as raised:
+        ShardClips([path], (8, 8, 1), 2, 4)
+    assert str(raised.value) == (
+        f"{path} (8 of 20 clips checked) holds uint8 frames whose largest value is 1: 0/1 images look black on keyin's "
+        f"0-255 scale; write the file again with frames * 255, or import the 0/1 frames with keyin-import binary=true"
+    )
+    assert len(ShardClips([shard_of(tmp_path / "scaled.h5", zero_one * 255)], (8, 8, 1), 2, 4)) == 20
+
+
+def test_blank_clips_are_data_but_files_of_blank_clips_only_are_refused(tmp_path):
+    frames = arrays(n=4)["frames"]
+    frames[1] = 0  # one blank clip
+    some_blank = shard_of(tmp_path / "some_blank.h5", frames)
+    all_blank = shard_of(tmp_path / "all_blank.h5", np.zeros_like(frames))
+    assert len(ShardClips([some_blank], (8, 8, 1), 2, 4)) == 4
+    assert len(ShardClips([some_blank, all_blank], (8, 8, 1), 2, 4)) == 8  # a blank shard among others
+    with pytest.raises(DatasetFormatError) as raised:
+        ShardClips([all_blank], (8, 8, 1), 2, 4)
+    assert str(raised.value) == (
+        f"{all_blank}: all 4 clips checked (of 4) are blank, each one value throughout (e.g. 0); float frames in [0, 1] "
+        f"cast to uint8 become 0: store np.round(frames * 255).astype(np.uint8) instead and write the file again"
+    )
+    other = shard_of(tmp_path / "white.h5", np.full_like(frames, 255))
+    with pytest.raises(DatasetFormatError, match=r"all_blank.h5 and 1 more: all 8 clips checked \(of 8\) are blank"):
+        check_frame_values([inspect_shard(all_blank), inspect_shard(other)])
+
+
+def test_float_frames_are_refused_with_their_values_and_the_fix(tmp_path):
+    path = tmp_path / "float.h5"
+    write_shard(path, arrays(), ATTRS)
+    with h5py.File(path, "a") as handle:
+        stored = handle["frames"][()]
+        del handle["frames"]
+        handle["frames"] = stored.astype(np.float32)  # 0-255 floats, where floats are [0, 1]
+    with pytest.raises(DatasetFormatError) as raised:
+        ShardClips([path], (8, 8, 1), 2, 4)
+    low, high = stored[0].min(), stored[0].max()
+    assert str(raised.value) == (
+        f"{path} holds float32 frames in [{low}, {high}], but keyin's HDF5 format stores uint8 0-255; store frames as "
+        f"uint8 0-255 (float frames in [0, 1]: np.round(frames * 255).astype(np.uint8)), or import them with "
+        f"keyin-import, which converts float frames in [0, 1]"
+    )

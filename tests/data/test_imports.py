@@ -145,6 +145,7 @@ def bad(tmp_path_factory):
     np.save(root / "binary.npy", (frames(20) > 100).astype(np.uint8))
     np.save(root / "float255.npy", frames(20).astype(np.float32))
     np.save(root / "flat.npy", frames(20)[..., 0])
+    np.save(root / "blank.npy", np.zeros((2, 20, 16, 16, 1), np.uint8))  # two videos, all 0
     write_robomimic(root / "demos.hdf5", [frames(20)])
     labels_file(root, {"good.mp4": [12, 40]}).rename(root / "past.json")
     labels_file(root, {"bad.mp4": [1]}).rename(root / "unknown.json")
@@ -158,9 +159,12 @@ BAD_INPUTS = [
     ("zero-frames", "empty.npy", {}, "{bad}/empty.npy has zero frames; remove it from the source"),
     ("mixed-sizes", "mixed", {}, "{bad}/mixed mixes image sizes or kinds: frame0.png is 32x24 colour, frame9.png is "
      "20x20 colour; give every frame of a video one size and kind"),
-    ("uint8-0-1", "binary.npy", {}, "{bad}/binary.npy holds uint8 frames whose largest value is 1: 0/1 images would "
-     "import as black; store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true"),
+    ("uint8-0-1", "binary.npy", {}, "{bad}/binary.npy holds uint8 frames whose largest value is 1: 0/1 images look "
+     "black on keyin's 0-255 scale; store them as 0/255 (frames * 255), as float in [0, 1], or pass binary=true"),
     ("float-0-255", "float255.npy", {}, "float255.npy: float frames must lie in [0, 1], but a frame holds values in [10, 10]; divide 0-255"),
+    ("all-blank", "blank.npy", {}, "every video of {bad}/blank.npy is blank (e.g. {bad}/blank.npy (video blank.npy[0]) "
+     "is 0 throughout); float frames in [0, 1] cast to uint8 become 0: store np.round(frames * 255).astype(np.uint8) "
+     "instead, or pass videos that show something"),
     ("no-channel-axis", "flat.npy", {}, "frames are (T, H, W, C) or (n, T, H, W, C) (grey frames need their channel"),
     ("camera-key", "demos.hdf5", {"camera_key": "wrist"},
      "data/demo_0/obs has no 'wrist'; set camera_key= to the camera to import (agentview_image)"),
@@ -182,6 +186,22 @@ def test_a_bad_input_names_the_file_and_the_fix_and_writes_nothing(bad, tmp_path
 
 
 def test_binary_true_scales_0_1_frames_to_0_255(tmp_path):
-    np.save(tmp_path / "binary.npy", np.stack([np.ones((40, 16, 16, 1), np.uint8), np.zeros((40, 16, 16, 1), np.uint8)]))
+    videos = np.zeros((2, 40, 16, 16, 1), np.uint8)
+    videos[0, :, :8] = 1  # the first video's top half is on; the second is blank, which one video of two may be
+    np.save(tmp_path / "binary.npy", videos)
     folder, _ = import_to(tmp_path, tmp_path / "binary.npy", binary=True)
-    assert float(clips(folder)[0]["frames"].min()) == 1.0 and float(clips(folder)[4]["frames"].max()) == 0.0
+    first = clips(folder)[0]["frames"]
+    assert float(first[..., :8, :].min()) == 1.0 and float(first[..., 8:, :].max()) == 0.0
+    assert float(clips(folder)[4]["frames"].max()) == 0.0
+
+
+def test_one_blank_video_is_imported_but_a_source_of_blank_videos_only_is_refused(tmp_path):
+    videos = np.zeros((2, 40, 16, 16, 1), np.uint8)
+    videos[0, 5:, 4:12, 4:12] = 255  # a square appears in the first video
+    np.save(tmp_path / "one_blank.npy", videos)
+    _, stats = import_to(tmp_path / "one", tmp_path / "one_blank.npy")
+    assert stats["videos"] == 2
+    np.save(tmp_path / "all_blank.npy", np.full((2, 40, 16, 16, 1), 255, np.uint8))
+    with pytest.raises(DatasetFormatError, match=r"every video of .*all_blank.npy is blank \(e.g. .* is 255 throughout\)"):
+        import_to(tmp_path / "all", tmp_path / "all_blank.npy")
+    assert not (tmp_path / "all").exists()
