@@ -1,5 +1,5 @@
 """Ten mp4 videos of Structured Brownian motion written by PyAV (not by keyin), and their turns as a
-labels CSV: the input of README's "Your own videos" walk-through (docs/examples/own_videos.sh).
+labels CSV: the input of the "Your own videos" walk-through in docs/discover.md (docs/examples/own_videos.sh).
 
     python docs/examples/make_videos.py <folder>
 """

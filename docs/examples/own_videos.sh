@@ -1,5 +1,5 @@
 #!/bin/sh
-# README "Your own videos": import, train, discover, look, score, on ten mp4s that PyAV writes (not keyin).
+# docs/discover.md, "Your own videos": import, train, discover, look, score, on ten mp4s that PyAV writes (not keyin).
 # From the repository root, with keyin installed:  sh docs/examples/own_videos.sh [/tmp/own_videos]
 set -e
 DIR=${1:-/tmp/own_videos}
