@@ -49,7 +49,11 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
 
 
 # Options added since keyin 0.1, at the default that does what 0.1 did: module → {key: value}.
-ADDED_SINCE = {"keyframes": {"teacher_chain": False, "teacher_leaves": False}, "interpolator": {"frozen_frames": False}}
+ADDED_SINCE = {
+    "keyframes": {"teacher_chain": False, "teacher_leaves": False, "delta_input": "soft", "loss_reduction": "sum",
+                  "frozen": "stage1", "entropy_bonus": 0.0, "entropy_bonus_steps": 0, "gumbel_offsets": False},
+    "interpolator": {"frozen_frames": False},
+}
 # Classes that moved since keyin 0.1, old path → new path.
 MOVED_TARGETS = {f"keyin.eval.baselines.{name}": f"keyin.decode.baselines.{name}" for name in ("RandomKeyframes", "ConstantKeyframes")}
 
