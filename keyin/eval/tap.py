@@ -27,7 +27,9 @@ def score_whole_clips(
 
     Returns:
         ``bce_per_pixel``; ``argmin_relative``, the mean (t - a) / (b - a) of the chosen frames;
-        ``argmin_last``, the fraction of them at the last admissible frame; ``n_sequences``.
+        ``argmin_last``, the fraction of them at the last admissible frame; ``argmin_middle``, the
+        fraction in the middle third (1/3 ≤ (t - a) / (b - a) ≤ 2/3); ``argmin_deciles``, the fraction
+        in each tenth of [0, 1] (:func:`landing_deciles`); ``n_sequences``.
     """
     losses, relative, at_last = [], [], []
     for batch in DataLoader(clips, batch_size=batch_size, shuffle=False):
@@ -38,13 +40,21 @@ def score_whole_clips(
         losses.append(loss.cpu())
         relative.append(clip_relative)
         at_last.append(clip_last)
-    pixels = batch["frames"][0, 0].numel()
+    pixels, relative = batch["frames"][0, 0].numel(), torch.cat(relative)
     return {
         "bce_per_pixel": float(torch.cat(losses).mean()) / pixels,
-        "argmin_relative": float(torch.cat(relative).mean()),
+        "argmin_relative": float(relative.mean()),
         "argmin_last": float(torch.cat(at_last).float().mean()),
+        "argmin_middle": float(((relative >= 1 / 3) & (relative <= 2 / 3)).float().mean()),
+        "argmin_deciles": landing_deciles(relative),
         "n_sequences": len(clips),
     }
+
+
+def landing_deciles(relative: torch.Tensor) -> list[float]:
+    """The fraction of (B,) relative times (t - a) / (b - a) in (0, 1) in each tenth [k/10, (k+1)/10)."""
+    counts = torch.bincount((relative * 10).floor().long().clamp(0, 9), minlength=10)
+    return [round(float(count) / len(relative), 4) for count in counts]
 
 
 @torch.no_grad()
