@@ -26,7 +26,7 @@ from keyin.data.generate import generate_dataset, split_seed
 from keyin.decode.baselines import ConstantKeyframes, RandomKeyframes
 from keyin.eval.f1 import keyframe_scores
 
-DATA_SEED = 0  # keyin/conf/dataset/brownian.yaml
+DATA_SEED = 0  # conf/dataset/brownian.yaml
 
 
 def future_keyframes(generator: BrownianGenerator, clips: int, seed: int) -> list[list[int]]:

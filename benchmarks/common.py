@@ -46,7 +46,7 @@ def clip_arguments(parser: argparse.ArgumentParser, clips: int) -> argparse.Argu
 
 
 def dataset_config(dataset_name: str) -> DictConfig:
-    """keyin/conf/dataset/<name>.yaml as the commands compose it, its defaults list included
+    """conf/dataset/<name>.yaml as the commands compose it, its defaults list included
     (``pushing_irregular`` extends ``pushing``)."""
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         return compose("eval", overrides=[f"dataset={dataset_name}"]).dataset

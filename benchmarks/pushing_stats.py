@@ -4,7 +4,7 @@
     python benchmarks/pushing_stats.py --dataset pushing pushing_irregular --split val --demos 200 \
         --tasks 240 --out benchmarks/results/pushing_irregular_stats.md
 
-Prints a Markdown table with a column per dataset (``--dataset``: keyin/conf/dataset/<name>.yaml's
+Prints a Markdown table with a column per dataset (``--dataset``: conf/dataset/<name>.yaml's
 generator), from the demos of the ``--split``'s first clips (physics only, the same labels as the
 generated clips): acceptance rate, the histograms of push lengths, of pauses and of the gaps between
 labels, keyframes per clip, detour sides, demo lengths and the fraction of padded clips, the
@@ -170,7 +170,7 @@ def draw_figure(generator: PushingGenerator, path: Path, rows: int, seed: int) -
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--dataset", nargs="+", default=["pushing"], help="keyin/conf/dataset/<name>.yaml, one column each")
+    parser.add_argument("--dataset", nargs="+", default=["pushing"], help="conf/dataset/<name>.yaml, one column each")
     parser.add_argument("--split", default="train", help="whose clips' demos are measured")
     parser.add_argument("--demos", type=int, default=400)
     parser.add_argument("--tasks", type=int, default=240, help="planning tasks (0: none)")

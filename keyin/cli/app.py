@@ -27,7 +27,7 @@ from keyin.cli.checks import moved_key_message
 from keyin.errors import KeyinError
 from keyin.io import atomic_write_text
 
-# The configs ship inside the package (keyin/conf), so an installed keyin needs no source tree.
+# The configs ship inside the package (conf), so an installed keyin needs no source tree.
 CONFIG_MODULE = "keyin.conf"
 
 # ${keyin.default:value,fallback}: the fallback when value is null (resume= picks the run dir).
@@ -148,7 +148,7 @@ def hydra_raises() -> Iterator[None]:
 
 
 def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Callable[[], None]]:
-    """``hydra.main`` on ``keyin/conf/<config_name>.yaml``, where a bad config group option, an unknown
+    """``hydra.main`` on ``conf/<config_name>.yaml``, where a bad config group option, an unknown
     key, an unparsable override or a run dir that cannot be created gives one ``error:`` line and
     exit status 2, like the checks of the task itself."""
 

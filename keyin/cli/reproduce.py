@@ -1,6 +1,6 @@
 """keyin-reproduce table=<name>: data, every job, their small files and the report of one committed table.
 
-The table's config (``keyin/conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
+The table's config (``conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
 (each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped,
 or a ``python -m keyin.pretrained export`` of trained models into a committed folder; a sweep whose
 ``creates`` files all exist is skipped: the models a table plans with are committed) and the

@@ -1,6 +1,6 @@
 """Experiment trackers at the edge of a job: wandb run names, sweep groups, online/offline, finish.
 
-The resolvers are used by ``keyin/conf/logger/wandb.yaml``:
+The resolvers are used by ``conf/logger/wandb.yaml``:
 
 * ``${keyin.job_label:${name},${hydra:job.override_dirname}}``: the run's name, with the job's
   overrides in a sweep (``train_keyin_brownian[model=keyin,seed=1]``);

@@ -32,7 +32,7 @@ PLANNING_SPLIT = "planning"  # the fixed planning tasks (REFERENCE §5.2), a spl
 class PushingGenerator:
     """Pushing clip generator; plain numbers only, so it pickles into spawn workers.
 
-    The fields mirror ``keyin/conf/dataset/pushing.yaml`` (``generator:``), the timing options
+    The fields mirror ``conf/dataset/pushing.yaml`` (``generator:``), the timing options
     (``push_speed_spread``, ``max_pause_frames``, ``pause_speed``) only in ``pushing_irregular.yaml``;
     docs/pushing.md explains each.
     """

@@ -35,7 +35,7 @@ from keyin.envs.layout import Layout
 
 @dataclass(frozen=True)
 class DemoParams:
-    """Demonstrator constants (plain numbers; mirrored in ``keyin/conf/dataset/pushing.yaml``, the
+    """Demonstrator constants (plain numbers; mirrored in ``conf/dataset/pushing.yaml``, the
     timing options ``push_speed_spread``, ``max_pause_frames``, ``pause_speed`` in ``pushing_irregular.yaml``)."""
 
     n_pushes: int = 6

@@ -50,7 +50,7 @@ class Layout:
 
 @dataclass(frozen=True)
 class LayoutSampler:
-    """Draws :class:`Layout` s; plain numbers only (mirrors ``keyin/conf/dataset/pushing.yaml``)."""
+    """Draws :class:`Layout` s; plain numbers only (mirrors ``conf/dataset/pushing.yaml``)."""
 
     arena_half: float = 0.95
     puck_radius: float = 0.06

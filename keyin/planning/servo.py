@@ -48,7 +48,7 @@ from keyin.errors import ConfigError
 from keyin.planning.cem import CEMParams, cem
 from keyin.planning.rollout import BatchRollout, Simulator
 
-# keyin/conf/planner keys -> ServoParams fields
+# conf/planner keys -> ServoParams fields
 CONFIG_KEYS = {
     "servo_horizon": "horizon",
     "servo_samples": "samples",
@@ -72,7 +72,7 @@ PuckObserver = Callable[[np.ndarray], np.ndarray]
 
 @dataclass(frozen=True)
 class ServoParams:
-    """The servo's constants (``keyin/conf/planner/*.yaml``, names in :data:`CONFIG_KEYS`)."""
+    """The servo's constants (``conf/planner/*.yaml``, names in :data:`CONFIG_KEYS`)."""
 
     horizon: int = 8  # l, actions per plan
     samples: int = 200

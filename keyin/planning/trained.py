@@ -58,7 +58,7 @@ def trained_module(
 
 @dataclass(frozen=True)
 class TrainedPlanner:
-    """What every learned high-level planner is configured with (``keyin/conf/planner/<name>.yaml``).
+    """What every learned high-level planner is configured with (``conf/planner/<name>.yaml``).
 
     Attributes:
         checkpoint: path of the trained model's ``last.ckpt``, or ``pretrained:<name>`` (:mod:`keyin.pretrained`).
