@@ -129,7 +129,7 @@ def test_every_job_of_every_table_composes(table):
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         cfg = compose("reproduce", overrides=[f"table={table}"])
         for sweep in cfg.table.sweeps:
-            if sweep.program == "export":  # python -m keyin.pretrained export CKPT... --folder DIR: argv, not overrides
+            if sweep.program == "export":  # python -m keyin.cli.pretrained export CKPT... --folder DIR: argv, not overrides
                 args = list(sweep.overrides)
                 folder, checkpoints = args[args.index("--folder") + 1], [arg for arg in args if arg.endswith(".ckpt")]
                 assert sorted(sweep.creates) == sorted(f"{folder}/{Path(c).parents[2].name}.ckpt" for c in checkpoints)

@@ -13,6 +13,7 @@ ENTRY_LAYERS = ("keyin.lit", "keyin.planning", "keyin.cli")
 # and planning/ -> lit/ (loading checkpoints), planning/ -> eval/.
 BELOW_DECODE = (*ENTRY_LAYERS, "keyin.eval", "keyin.viz", "keyin.decode")
 BANNED = {
+    "keyin.pretrained": (*BELOW_DECODE, "keyin.models", "keyin.losses", "keyin.data", "keyin.envs"),
     "keyin.viz": (*ENTRY_LAYERS, "keyin.eval"),
     "keyin.eval": ENTRY_LAYERS,
     "keyin.decode": (*ENTRY_LAYERS, "keyin.eval", "keyin.viz"),
@@ -78,3 +79,62 @@ def test_deferred_relative_and_type_checking_imports_are_seen():
         "keyin.cli.app.fail", "keyin.eval.f1.keyframe_lists", "keyin.io", "keyin.lit.keyframes",
         "keyin.planning", "typing.TYPE_CHECKING",
     ]
+
+
+def module_graph() -> dict[str, set[str]]:
+    """keyin module → the keyin modules it imports anywhere in it (``from a import b`` counts as a
+    or as a.b, whichever is a module)."""
+    modules = {module_name(path): path for path in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets = set()
+        for _, target in imported(path.read_text(encoding="utf-8"), package):
+            target = target if target in modules else target.rpartition(".")[0]
+            if target in modules and target != name:
+                targets.add(target)
+        graph[name] = targets
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm)."""
+    index, low, stack, on_stack, found, counter = {}, {}, [], set(), [], [0]
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = counter[0]
+        counter[0] += 1
+        stack.append(node)
+        on_stack.add(node)
+        for target in graph.get(node, ()):
+            if target not in index:
+                visit(target)
+                low[node] = min(low[node], low[target])
+            elif target in on_stack:
+                low[node] = min(low[node], index[target])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                top = stack.pop()
+                on_stack.discard(top)
+                component.append(top)
+                if top == node:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+def test_no_modules_import_each_other_in_a_circle():
+    """A circle held open only by an import inside a function is still a circle."""
+    circles = cycles(module_graph())
+    assert not circles, f"modules that import each other in a circle: {circles}"
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert cycles({"a": {"b"}, "b": set()}) == []

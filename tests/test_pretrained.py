@@ -13,7 +13,8 @@ from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.errors import CheckpointError
 from keyin.io import sha256_of
-from keyin.lit.checkpoints import load_checkpoint, load_trained_module
+from keyin.lit.checkpoints import load_checkpoint
+from keyin.lit.registry import load_trained_module
 from tests.cli.runner import error_line, run
 from tests.configs import OLD_SMOKE_KEYIN
 
@@ -88,7 +89,7 @@ def test_every_shipped_model_is_the_file_its_card_names(name):
 def test_the_bundled_example_video_is_the_generators_clip_and_its_labels_its_turns():
     from keyin.data.brownian import BrownianGenerator
     from keyin.data.sources import decoded_frames
-    from keyin.pretrained.__main__ import EXAMPLE, EXAMPLE_LABELS
+    from keyin.cli.pretrained import EXAMPLE, EXAMPLE_LABELS
 
     arrays, _ = BrownianGenerator(n_cond=1, n_future=199).generate(0, seed=777)
     decoded = np.stack(list(decoded_frames(pretrained.FOLDER / EXAMPLE)))
@@ -98,10 +99,10 @@ def test_the_bundled_example_video_is_the_generators_clip_and_its_labels_its_tur
 
 
 def test_export_slims_run_checkpoints_into_a_folder_named_and_described_by_their_runs(smoke_checkpoint, tmp_path, monkeypatch, capsys):
-    from keyin.pretrained.__main__ import main
+    from keyin.cli.pretrained import main
 
     _, path = smoke_checkpoint
-    monkeypatch.setattr("sys.argv", ["keyin.pretrained", "export", str(path), "--folder", str(tmp_path / "models")])
+    monkeypatch.setattr("sys.argv", ["keyin.cli.pretrained", "export", str(path), "--folder", str(tmp_path / "models")])
     main()
     file = tmp_path / "models" / "run.ckpt"  # the run dir's name
     assert capsys.readouterr().out.strip() == str(file)
@@ -110,6 +111,6 @@ def test_export_slims_run_checkpoints_into_a_folder_named_and_described_by_their
     assert card["source_sha256"] == sha256_of(path) and card["sha256"] == sha256_of(file)
     full, slim = load_checkpoint(path), load_checkpoint(file)  # a plain path loads as any checkpoint
     assert slim["state_dict"].keys() == full["state_dict"].keys() and "optimizer_states" not in slim
-    monkeypatch.setattr("sys.argv", ["keyin.pretrained", "export", str(path), str(path), "--name", "x"])
+    monkeypatch.setattr("sys.argv", ["keyin.cli.pretrained", "export", str(path), str(path), "--name", "x"])
     with pytest.raises(SystemExit, match="--name and --command name one checkpoint"):
         main()

@@ -20,7 +20,7 @@ from keyin.decode.rules import KEYIN_RULES
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.eval.windowed import discover_videos
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 
 
 def check_discover(cfg: DictConfig) -> None:

@@ -20,7 +20,7 @@ from keyin.errors import ConfigError
 from keyin.decode.rules import SegmentationDiscoverer
 from keyin.eval.discovery import score_methods
 from keyin.eval.video import evaluate_video, save_prior_samples, save_rollouts
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 
 
 def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:

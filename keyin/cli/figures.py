@@ -24,7 +24,7 @@ from keyin.errors import ConfigError
 from keyin.eval.figures import MODES, save_comparison, save_trajectory_figure
 from keyin.eval.video import save_prior_samples
 from keyin.io import atomic_write_text
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.models import KEYIN
 
 # figure -> what its file is called after

@@ -2,7 +2,7 @@
 
 The table's config (``conf/table/<name>.yaml``) names the datasets to generate, the sweeps to run
 (each a ``keyin-train -m``, ``keyin-eval -m`` or ``keyin-plan -m`` call, resumable: finished jobs are skipped,
-or a ``python -m keyin.pretrained export`` of trained models into a committed folder; a sweep whose
+or a ``python -m keyin.cli.pretrained export`` of trained models into a committed folder; a sweep whose
 ``creates`` files all exist is skipped: the models a table plans with are committed) and the
 folder the table's jobs are in. Each job's ``metrics.json`` (and ``tasks.jsonl``, ``predictions.json``, a
 planner's one picture per outcome kind), its composed ``config.yaml`` and the SHA-256 of every checkpoint
@@ -28,7 +28,7 @@ from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.pretrained import PREFIX, is_pretrained, registry, resolve
 
 STEPS = ("data", "jobs", "collect", "report")
-PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan", "export": "keyin.pretrained"}
+PROGRAMS = {"train": "keyin.cli.train", "eval": "keyin.cli.eval", "plan": "keyin.cli.plan", "export": "keyin.cli.pretrained"}
 SMALL_FILES = ("metrics.json", "predictions.json", "tasks.jsonl")  # copied as they are; the config comes from .hydra/
 OUTCOME_PICTURES = "pictures/outcome_*.png"  # keyin-plan's first episode of each outcome kind
 

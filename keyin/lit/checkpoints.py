@@ -10,20 +10,15 @@ import lightning as L
 import torch
 from lightning.pytorch.plugins.io import TorchCheckpointIO
 
-from keyin import RENAMED_SINCE_0_1, __version__
+from keyin import __version__
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes
+from keyin.lit.legacy import current_model_name, upgrade_state_dict
 from keyin.pretrained import full_precision, resolve
 
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
 VERSION_KEY = "keyin_version"
-# Stage → the networks its LightningModule once kept at the top level and its model (``module.model``)
-# holds now: keyin 0.1's stage 2 (a KEYIN model since 0.2) and the Surprise baseline (an SVG model).
-MODEL_NETWORKS = {
-    "keyframes": ("encoder.", "decoder.", "interpolator.", "predictor."),
-    "surprise": ("encoder.", "decoder.", "core."),
-}
 PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
 
 
@@ -39,19 +34,11 @@ class RunConfigInCheckpoint(L.Callback):
         checkpoint[VERSION_KEY] = __version__
 
 
-def upgrade_state_dict(state_dict: Mapping[str, Any], stage: str) -> dict[str, Any]:
-    """A state dict of ``stage`` in this version's layout (``model.encoder.*``, ...): one in the old
-    layout (``encoder.*``, ...; :data:`MODEL_NETWORKS`) is renamed, one of today, or of a stage
-    without a model, is returned as it is."""
-    networks = MODEL_NETWORKS.get(stage, ())
-    return {f"model.{name}" if name.startswith(networks) else name: value for name, value in state_dict.items()}
-
-
 def saved_model_name(checkpoint: Mapping[str, Any]) -> str | None:
     """The ``model.name`` a checkpoint was trained as, in this version's names (a checkpoint of keyin
     0.1, which has no version entry, says ``keyin`` for today's ``keyin_plus``)."""
     name = (checkpoint.get(CONFIG_KEY) or {}).get("model", {}).get("name")
-    return name if VERSION_KEY in checkpoint else RENAMED_SINCE_0_1.get(name, name)
+    return current_model_name(name, VERSION_KEY in checkpoint)
 
 
 STAGE_CHECKPOINTS = {
@@ -157,30 +144,3 @@ def check_same_model(
             f"{path} holds a model of other sizes ({', '.join(changed) or 'other parameter shapes'}); "
             f"resume with the overrides it was trained with, or start a new run dir"
         )
-
-
-def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tuple[L.LightningModule, dict[str, Any]]:
-    """A trained module of either stage (in eval mode) and the run config stored with it, its
-    ``model.name`` in this version's names (:func:`saved_model_name`).
-
-    Args:
-        stage: "interpolator", "keyframes", "surprise", "tap", "frames", or None for whichever the
-            checkpoint holds.
-    """
-    # The modules import this file's callback, so they are imported here.
-    from keyin.lit.frame_autoencoder import FrameAutoencoderModule
-    from keyin.lit.interpolator import InterpolatorModule
-    from keyin.lit.keyframes import KeyframeModule
-    from keyin.lit.surprise import SurpriseModule
-    from keyin.lit.tap import TAPModule
-
-    checkpoint = load_checkpoint(path, stage)
-    stages = {"interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule, "tap": TAPModule,
-              "frames": FrameAutoencoderModule}
-    module_class = stages[checkpoint[STAGE_KEY]]
-    module = module_class(**checkpoint["hyper_parameters"])
-    module.load_state_dict(checkpoint["state_dict"])
-    config = dict(checkpoint[CONFIG_KEY])
-    if "model" in config:
-        config["model"] = dict(config["model"], name=saved_model_name(checkpoint))
-    return module.eval(), config

@@ -18,7 +18,7 @@ from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframe_probab
 from keyin.decode.segmentation import KNEE, KeyframeCost
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.lit.checkpoints import upgrade_state_dict
+from keyin.lit.legacy import upgrade_state_dict
 from keyin.lit.interpolator import InterpolatorModule
 from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights

@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from keyin.errors import CheckpointError, DatasetFormatError
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.pretrained import resolve
 
 

@@ -11,7 +11,7 @@ import torch
 from keyin.data.clips import ShardClips
 from keyin.data.embeddings import EmbeddedClips, cached_embeddings, encoder_fingerprint
 from keyin.data.hdf5 import split_files
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.lit.frame_autoencoder import FrameAutoencoderModule
 from tests.cli.runner import error_line, last_json, run, train_on_few_pushing_demos
 

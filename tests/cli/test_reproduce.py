@@ -57,7 +57,7 @@ def test_a_sweep_whose_files_exist_is_skipped_and_an_export_runs_the_pretrained_
     cfg = OmegaConf.create({"steps": ["jobs"], "data_dir": "data", "table": {"data": [], "sweeps": sweeps}})
     assert commands(cfg) == [
         ["keyin.cli.train", "-m", "model=static", "data_dir=data"],
-        ["keyin.pretrained", "export", "runs/a/checkpoints/keyframes/last.ckpt", "--folder", "models"],
+        ["keyin.cli.pretrained", "export", "runs/a/checkpoints/keyframes/last.ckpt", "--folder", "models"],
     ]
 
 

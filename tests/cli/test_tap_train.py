@@ -7,7 +7,7 @@ import imageio.v3 as iio
 import pytest
 import torch
 
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.lit.tap import TAPModule
 from tests.cli.runner import last_json, run, train_on_few_pushing_demos
 

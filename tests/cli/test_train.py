@@ -10,7 +10,8 @@ import torch
 
 from keyin.lit import checkpoints
 from keyin import __version__
-from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_checkpoint, load_trained_module
+from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, load_checkpoint
+from keyin.lit.registry import load_trained_module
 from keyin.lit.interpolator import InterpolatorModule
 from tests.cli.runner import error_line, last_json, run
 from tests.configs import OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES

@@ -7,6 +7,7 @@ import torch
 
 from keyin.lit.checkpoints import load_checkpoint, load_stage1
 from keyin.lit.interpolator import InterpolatorModule
+from keyin.lit.registry import load_trained_module
 from keyin.lit.keyframes import KeyframeModule
 from keyin.losses.soft_keyframe import interpolation_loss, keyin_loss, offset_entropy, position_distributions
 from keyin.models.keyin import interpolator_offsets
@@ -141,8 +142,6 @@ def test_a_stage_2_checkpoint_gives_its_frozen_stage_1():
 
 
 def test_old_checkpoints_load_with_the_papers_choices_as_they_ran():
-    from keyin.lit.checkpoints import load_trained_module
-
     module_, _ = load_trained_module("pretrained:brownian")
     assert module_.model.delta_input == "soft"
     assert module_.hparams.get("loss_reduction", "sum") == "sum" and module_.hparams.get("entropy_bonus", 0.0) == 0.0

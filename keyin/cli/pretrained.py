@@ -1,10 +1,10 @@
 """Maintainers' commands for what keyin ships (docs/models.md):
 
-    python -m keyin.pretrained export <checkpoint> --name brownian --command "keyin-reproduce table=..."
-    python -m keyin.pretrained export <run dir>/checkpoints/keyframes/last.ckpt ... --folder <dir>
+    python -m keyin.cli.pretrained export <checkpoint> --name brownian --command "keyin-reproduce table=..."
+    python -m keyin.cli.pretrained export <run dir>/checkpoints/keyframes/last.ckpt ... --folder <dir>
         # slim copies outside the package (a table's models), each named after its run dir, its
         # command read from the run's .hydra/hydra.yaml
-    python -m keyin.pretrained example     # the example video `make demo` discovers the keyframes of
+    python -m keyin.cli.pretrained example     # the example video `make demo` discovers the keyframes of
 """
 
 from __future__ import annotations
@@ -82,3 +82,4 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
+
