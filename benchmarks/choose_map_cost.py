@@ -27,7 +27,7 @@ from keyin.decode.rules import with_sequence_ends
 from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
 from keyin.decode.segmentation import KNEE, decode_by_length
 from keyin.eval.f1 import column_scores, keyframe_lists, keyframe_scores
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.losses.image import future_pixel_weights
 
 

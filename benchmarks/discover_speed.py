@@ -43,7 +43,7 @@ from keyin.data.brownian import BrownianGenerator
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.eval.f1 import keyframe_scores
 from keyin.eval.windowed import discover_videos
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.models.keyin import KEYIN
 
 PARTS = {  # part -> (owner, attribute) of the function timed

@@ -17,7 +17,7 @@ import torch
 
 from common import cpu_model
 from keyin.data.embeddings import EmbeddedClips, cached_embeddings
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 
 
 def main() -> None:

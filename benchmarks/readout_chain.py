@@ -21,7 +21,8 @@ from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.offsets import joint_offset_keyframes, offset_keyframes
 from keyin.decode.rules import boundary_keyframes, with_sequence_ends
 from keyin.eval.f1 import column_scores, keyframe_lists
-from keyin.lit.checkpoints import load_checkpoint, load_trained_module
+from keyin.lit.checkpoints import load_checkpoint
+from keyin.lit.registry import load_trained_module
 
 
 @torch.no_grad()

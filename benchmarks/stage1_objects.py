@@ -22,7 +22,8 @@ from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
 from keyin.data.segments import segment_frames, valid_frames
 from keyin.eval.placement import placement_scores
-from keyin.lit.checkpoints import STAGE_KEY, load_checkpoint, load_trained_module
+from keyin.lit.checkpoints import STAGE_KEY, load_checkpoint
+from keyin.lit.registry import load_trained_module
 from keyin.models.interpolator import interpolate_segments
 
 

@@ -20,7 +20,8 @@ import torch.nn.functional as F
 
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import split_files
-from keyin.lit.checkpoints import load_checkpoint, load_trained_module
+from keyin.lit.checkpoints import load_checkpoint
+from keyin.lit.registry import load_trained_module
 
 
 def frame_bce(probs: torch.Tensor, targets: torch.Tensor) -> float:

@@ -33,7 +33,7 @@ from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.offsets import offset_keyframes
 from keyin.decode.segmentation import segmentation_offsets
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 from keyin.losses.image import future_pixel_weights
 from keyin.losses.soft_keyframe import (
     argmax_positions,

@@ -32,7 +32,7 @@ from keyin.data.hdf5 import load_arrays, split_files
 from keyin.data.imports import clip_origins
 from keyin.eval.discovery import discover
 from keyin.eval.f1 import hausdorff
-from keyin.lit.checkpoints import load_trained_module
+from keyin.lit.registry import load_trained_module
 
 FPS = 10
 CODECS = {  # name -> (FFmpeg encoder, its pixel format or None for the default, file suffix, description)
