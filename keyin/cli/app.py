@@ -53,6 +53,18 @@ def quiet_expected_library_output() -> None:
         lightning.addFilter(LightningTips())
 
 
+# Libraries whose INFO lines say nothing a user acts on (absl: "MUJOCO_GL=egl, attempting to import
+# ...", "MuJoCo library version is ..."; OpenGL: "No OpenGL_accelerate module loaded"); verbose=true shows them.
+CHATTY_LIBRARIES = ("absl", "OpenGL")
+
+
+def show_library_info(verbose: bool) -> None:
+    """Hide (or, with ``verbose``, show) the INFO lines of :data:`CHATTY_LIBRARIES`; their warnings
+    and errors are always shown."""
+    for name in CHATTY_LIBRARIES:
+        logging.getLogger(name).setLevel(logging.NOTSET if verbose else logging.WARNING)
+
+
 def fail(message: str) -> None:
     """Print one error line and exit with status 2 (bad input, not a crash)."""
     print(f"error: {message}", file=sys.stderr)
@@ -153,7 +165,12 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
     exit status 2, like the checks of the task itself."""
 
     def decorate(task: Callable[[DictConfig], Any]) -> Callable[[], None]:
-        hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(task)
+        @functools.wraps(task)
+        def configured(cfg: DictConfig) -> Any:
+            show_library_info(bool(cfg.get("verbose", False)))
+            return task(cfg)
+
+        hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(configured)
 
         @functools.wraps(task)
         def main() -> None:

@@ -4,7 +4,8 @@ dropped, while every other warning, the user's data and config included, still s
 import logging
 import warnings
 
-from keyin.cli.app import LightningTips, quiet_expected_library_output
+from keyin.cli.app import CHATTY_LIBRARIES, LightningTips, quiet_expected_library_output, show_library_info
+from tests.cli.runner import run
 
 
 def record(message: str) -> logging.LogRecord:
@@ -31,3 +32,17 @@ def test_installing_the_filters_twice_adds_them_once():
     quiet_expected_library_output()
     filters = logging.getLogger("lightning.pytorch.utilities.rank_zero").filters
     assert sum(isinstance(existing, LightningTips) for existing in filters) == 1
+
+
+def test_library_info_lines_are_hidden_unless_verbose(tmp_path):
+    """absl's and OpenGL's INFO lines ("MUJOCO_GL=egl, attempting to import ...") are hidden by
+    default and shown with verbose=true; their warnings always show."""
+    for verbose, shown in (("false", False), ("true", True)):
+        result = run("generate", "dataset=brownian", "splits={test: 2}", "progress=false", f"verbose={verbose}",
+                     f"hydra.run.dir=run_{verbose}", cwd=tmp_path)
+        assert result.returncode == 0, result.stderr
+        for name in CHATTY_LIBRARIES:
+            library = logging.getLogger(name)
+            assert library.isEnabledFor(logging.WARNING)
+            assert library.level == (logging.NOTSET if shown else logging.WARNING)
+    show_library_info(False)
