@@ -23,8 +23,9 @@ from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
 from keyin.losses.soft_keyframe import gaussian_kl
-from keyin.models import ConvDecoder, ConvEncoder, Interpolator, InterpolatorPosterior
+from keyin.models import InterpolatorPosterior
 from keyin.models.interpolator import interpolate_segments
+from keyin.models.keyin import stage1_networks
 
 
 class InterpolatorModule(L.LightningModule):
@@ -63,13 +64,7 @@ class InterpolatorModule(L.LightningModule):
         if not 1 <= offset_min <= offset_max <= max_offset:
             raise ValueError(f"interpolator offsets [{offset_min}, {offset_max}] must lie in [1, max_offset={max_offset}]")
         self.save_hyperparameters()
-        conv = dict(
-            image_size=image_size, channels=channels, width=conv_width, embed_dim=embed_dim,
-            coord_channels=coord_channels, norm=norm,
-        )
-        self.encoder = ConvEncoder(**conv)
-        self.decoder = ConvDecoder(**conv)
-        self.interpolator = Interpolator(embed_dim, max_offset, latent_dim, lstm_hidden, lstm_layers, mlp_hidden, step_input)
+        self.encoder, self.decoder, self.interpolator = stage1_networks(self.hparams)
         self.posterior = InterpolatorPosterior(embed_dim, latent_dim, lstm_hidden) if latent_dim else None
         self.segment_rng = torch.Generator().manual_seed(0)
         if frozen_frames:

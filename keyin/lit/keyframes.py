@@ -19,12 +19,11 @@ from keyin.decode.segmentation import KNEE, KeyframeCost
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.legacy import upgrade_state_dict
-from keyin.lit.interpolator import InterpolatorModule
 from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights
 from keyin.losses.soft_keyframe import REDUCTIONS, argmax_positions, gaussian_kl, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
-from keyin.models.keyin import FROZEN_IN_STAGE2
+from keyin.models.keyin import FROZEN_IN_STAGE2, stage1_networks
 
 
 class KeyframeModule(L.LightningModule):
@@ -84,13 +83,13 @@ class KeyframeModule(L.LightningModule):
                 f"got {entropy_bonus} over {entropy_bonus_steps}"
             )
         self.save_hyperparameters()
-        frozen = InterpolatorModule(**stage1)
+        encoder, decoder, interpolator = stage1_networks(stage1)
         predictor = KeyframePredictor(
             stage1["embed_dim"], n_keyframes, stage1["max_offset"], latent_dim, lstm_hidden, lstm_layers,
             attn_scale=attn_scale, offset_mode=offset_mode, fixed_offset=fixed_offset, offset_evidence=offset_evidence,
         )
         self.model = KEYIN(
-            frozen.encoder, frozen.decoder, frozen.interpolator, predictor, stage1["n_cond"], delta_input=delta_input,
+            encoder, decoder, interpolator, predictor, stage1["n_cond"], delta_input=delta_input,
             gumbel_offsets=gumbel_offsets,
         )
         self.freeze_stage1()

@@ -8,6 +8,8 @@ with another offset head (``KeyframePredictor.offset_mode``).
 
 from __future__ import annotations
 
+from typing import Any, Mapping
+
 import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
@@ -47,6 +49,20 @@ def interpolator_offsets(offset_probs: Tensor, delta_input: str) -> Tensor:
     if delta_input == "straight_through":
         return hard + offset_probs - offset_probs.detach()
     raise ValueError(f"delta_input must be one of {DELTA_INPUTS}, got {delta_input!r}")
+
+
+def stage1_networks(stage1: Mapping[str, Any]) -> tuple[ConvEncoder, ConvDecoder, Interpolator]:
+    """The encoder, decoder and interpolator of a stage-1 module's hyper-parameters (its
+    ``hparams``: sizes and the frame model's choices); their weights come from its checkpoint."""
+    conv = dict(
+        image_size=stage1["image_size"], channels=stage1["channels"], width=stage1["conv_width"],
+        embed_dim=stage1["embed_dim"], coord_channels=stage1["coord_channels"], norm=stage1["norm"],
+    )
+    interpolator = Interpolator(
+        stage1["embed_dim"], stage1["max_offset"], stage1["latent_dim"], stage1["lstm_hidden"], stage1["lstm_layers"],
+        stage1["mlp_hidden"], stage1["step_input"],
+    )
+    return ConvEncoder(**conv), ConvDecoder(**conv), interpolator
 
 
 class KEYIN(nn.Module):
