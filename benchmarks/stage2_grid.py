@@ -19,16 +19,17 @@ import yaml
 
 from common import publish
 
-OPTIONS = {  # config path → column text; a value equal to the baseline's is left out
-    "model.keyframes.delta_input": "δ to the interpolator",
-    "model.keyframes.loss_reduction": "reduction",
-    "model.keyframes.frozen": "frozen in stage 2",
-    "model.keyframes.attn_scale": "attention /√E",
-    "loss.normalize_key_targets": "K̃ / c",
-    "scale.lr_stage2": "lr",
-    "scale.inter_latent": "Zi",
-    "model.keyframes.entropy_bonus": "entropy aid",
-    "model.keyframes.gumbel_offsets": "Gumbel aid",
+OPTIONS = {  # config path → (column text, the value of a config written before the option existed)
+    "model.keyframes.delta_input": ("δ to the interpolator", "soft"),
+    "model.keyframes.loss_reduction": ("reduction", "sum"),
+    "model.keyframes.frozen": ("frozen in stage 2", "stage1"),
+    "model.keyframes.attn_scale": ("attention /√E", True),
+    "loss.normalize_key_targets": ("K̃ / c", True),
+    "scale.lr_stage2": ("lr", None),
+    "scale.inter_latent": ("Zi", None),
+    "model.keyframes.entropy_bonus": ("entropy aid", 0.0),
+    "model.keyframes.gumbel_offsets": ("Gumbel aid", False),
+    "interpolator_ckpt": ("stage 1", None),
 }
 DIAGNOSTICS = {
     "L_inter soft δ": "L_inter soft δ",
@@ -42,9 +43,10 @@ DIAGNOSTICS = {
 
 
 def lookup(config: dict, dotted: str):
+    """The value at a dotted path of a config, or the option's value before it existed (:data:`OPTIONS`)."""
     for key in dotted.split("."):
         config = config.get(key, {}) if isinstance(config, dict) else {}
-    return None if config == {} else config
+    return OPTIONS[dotted][1] if config == {} else config
 
 
 def last_validation(table: Path) -> dict[str, dict[str, float]]:
@@ -76,7 +78,7 @@ def main() -> None:
     for job in jobs:
         metrics = json.loads((job / "metrics.json").read_text())
         config = yaml.safe_load((job / "config.yaml").read_text())
-        changed = [f"{text} {lookup(config, key)}" for key, text in OPTIONS.items() if lookup(config, key) != lookup(baseline, key)]
+        changed = [f"{text} {lookup(config, key)}" for key, (text, _) in OPTIONS.items() if lookup(config, key) != lookup(baseline, key)]
         curve = validation.get(job.name, {})
         rows.append((curve.get("val/f1", float("nan")), job.name, changed, metrics, curve, diagnostics(args.folder / "diagnostics" / f"{job.name}.md")))
     rows.sort(key=lambda row: -row[0])
