@@ -130,23 +130,10 @@ def frame_bce(logits: Tensor, frames: Tensor, weights: Tensor | None = None) -> 
     )
 
 
-def shared_weights(weights: Tensor, admissible: Tensor) -> Tensor:
-    """One pixel-weight map per pair, the same for every candidate: the largest weight each pixel has
-    in any admissible frame, (B, 1, C, H, W) from (B, L, C, H, W) weights and (B, L) admissible.
-
-    Per-frame weights (changed pixels weigh more, keyin/losses/image.py) would weigh the candidates
-    differently: frames that differ little from the clip's first frame weigh fewer pixels and so cost
-    less, whatever the prediction, and the minimum would pick the earliest frame (docs/baselines.md)."""
-    return weights.masked_fill(~admissible[:, :, None, None, None], 0.0).amax(1, keepdim=True)
-
-
-def entropy_floor(frames: Tensor, weights: Tensor | None = None) -> Tensor:
-    """(B, L) the least BCE a prediction can reach on each frame: Σ w·H(y) over its pixels (0 for
-    binary frames), from (B, L, C, H, W) frames in [0, 1] and weights broadcastable to them."""
-    entropy = F.binary_cross_entropy(frames, frames, reduction="none")  # H(y) per pixel
-    if weights is not None:
-        entropy = entropy * weights
-    return entropy.flatten(2).sum(-1)
+def entropy_floor(frames: Tensor) -> Tensor:
+    """(B, L) the least BCE a prediction can reach on each frame: Σ H(y) over its pixels (0 for
+    binary frames), from (B, L, C, H, W) frames in [0, 1]."""
+    return F.binary_cross_entropy(frames, frames, reduction="none").flatten(2).sum(-1)
 
 
 def min_over_time_bce(
@@ -154,12 +141,13 @@ def min_over_time_bce(
 ) -> tuple[Tensor, Tensor]:
     """TAP's loss: the BCE of the prediction against its best-matching admissible frame.
 
-    The candidates are compared on equal terms: with one weight map for all of them
-    (:func:`shared_weights`) and by their BCE above what a perfect prediction of each would cost
+    The frame is chosen by the plain BCE above what a perfect prediction of each frame would cost
     (:func:`entropy_floor`, i.e. the KL to the frame), so that no frame wins for being easier to
-    reproduce. The loss is the chosen frame's BCE (its gradient is the KL's). The logits form needs
-    no clipping of probabilities (REFERENCE §8.12). The gradient reaches the prediction through the
-    chosen frame only.
+    reproduce: neither for holding less entropy nor, under per-frame pixel weights (changed pixels weigh
+    more, keyin/losses/image.py), for weighing fewer pixels, which made the frames next to the start
+    the cheapest whatever the prediction (docs/baselines.md). The loss is the chosen frame's BCE with
+    its weights. The logits form needs no clipping of probabilities (REFERENCE §8.12). The gradient
+    reaches the prediction through the chosen frame only.
 
     Args:
         logits: (B, C, H, W) predicted logits.
@@ -167,18 +155,16 @@ def min_over_time_bce(
         admissible: (B, L) bool (:func:`admissible_frames`); every row needs one True.
         weights: (B, L, C, H, W) pixel weights of the frames, or None for the plain BCE.
     Returns:
-        loss: (B,) the chosen admissible frame's BCE summed over pixels;
+        loss: (B,) the chosen admissible frame's (weighted) BCE summed over pixels;
         argmin: (B,) int64, that t.
     Raises:
         ValueError: if a clip has no admissible frame.
     """
     if not admissible.any(dim=1).all():
         raise ValueError("a clip has no admissible frame for TAP's minimum over time; widen its (start, goal) pair")
-    if weights is not None:
-        weights = shared_weights(weights, admissible).expand_as(frames)
-    per_frame = frame_bce(logits, frames, weights)  # (B, L)
-    excess = (per_frame - entropy_floor(frames, weights)).masked_fill(~admissible, float("inf"))
+    excess = (frame_bce(logits, frames) - entropy_floor(frames)).masked_fill(~admissible, float("inf"))
     argmin = excess.argmin(dim=1)
+    per_frame = frame_bce(logits, frames, weights)  # (B, L)
     return per_frame.gather(1, argmin[:, None]).squeeze(1), argmin
 
 

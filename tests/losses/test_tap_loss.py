@@ -11,7 +11,6 @@ from keyin.losses.tap import (
     frame_bce,
     min_over_time_bce,
     sample_pairs,
-    shared_weights,
     shortest_gap,
     whole_clip_pairs,
 )
@@ -88,10 +87,10 @@ def test_the_loss_is_the_least_per_frame_bce_over_admissible_frames():
     assert frame_bce(logits, frames).shape == (3, LENGTH)
 
 
-def test_weighted_candidates_are_compared_on_one_weight_map_and_above_their_entropy():
+def test_the_frame_is_chosen_by_the_plain_kl_and_scored_with_its_weights():
     """A perfect prediction of frame 6 picks frame 6 although frame 2 weighs fewer changed pixels and
-    holds less entropy (the bias that made TAP copy its start, docs/baselines.md); brute force over
-    the candidates with one shared weight map and the entropy floor removed gives the same frame."""
+    holds less entropy (the bias that made TAP copy its start, docs/baselines.md); brute force: the
+    least plain BCE above each frame's entropy, and the chosen frame's weighted BCE as the loss."""
     generator = torch.Generator().manual_seed(4)
     frames = torch.full((1, LENGTH, 1, 4, 4), 0.5, dtype=torch.float64)
     frames[:, :, :, :, :2] = torch.rand(1, LENGTH, 1, 4, 2, generator=generator, dtype=torch.float64) * 0.6 + 0.2
@@ -101,17 +100,13 @@ def test_weighted_candidates_are_compared_on_one_weight_map_and_above_their_entr
     target = 6
     logits = torch.logit(frames[:, target])
     per_frame_weighted = frame_bce(logits, frames, weights)[0]
-    assert per_frame_weighted[2] < per_frame_weighted[target]  # the old rule's minimum: frame 2
+    assert per_frame_weighted[2] < per_frame_weighted[target]  # the weighted minimum: frame 2
     loss, argmin = min_over_time_bce(logits, frames, admissible, weights)
-    assert int(argmin) == target
-    shared = shared_weights(weights, admissible)
-    excess = {t: float((F.binary_cross_entropy_with_logits(logits[0], frames[0, t], reduction="none") * shared[0, 0]).sum()
-                       - (F.binary_cross_entropy(frames[0, t], frames[0, t], reduction="none") * shared[0, 0]).sum())
+    excess = {t: float(F.binary_cross_entropy_with_logits(logits[0], frames[0, t], reduction="sum")
+                       - F.binary_cross_entropy(frames[0, t], frames[0, t], reduction="sum"))
               for t in range(LENGTH) if admissible[0, t]}
-    assert min(excess, key=excess.get) == target and excess[target] == pytest.approx(0.0, abs=1e-9)
-    expected = float((F.binary_cross_entropy_with_logits(logits[0], frames[0, target], reduction="none") * shared[0, 0]).sum())
-    assert float(loss) == pytest.approx(expected)
-    assert torch.equal(shared[0, 0], weights[0, 2:8].amax(0))  # the largest weight over the admissible frames 2…7
+    assert int(argmin) == target == min(excess, key=excess.get) and excess[target] == pytest.approx(0.0, abs=1e-9)
+    assert float(loss) == pytest.approx(float(per_frame_weighted[target]))
 
 
 def test_the_gradient_flows_through_the_chosen_frame_only():
