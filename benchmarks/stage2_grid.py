@@ -49,6 +49,12 @@ def lookup(config: dict, dotted: str):
     return OPTIONS[dotted][1] if config == {} else config
 
 
+def shown(value) -> str:
+    """An option's value as the table shows it: a checkpoint path by its run folder's name."""
+    text = str(value)
+    return Path(text).parents[2].name if text.endswith(".ckpt") else text
+
+
 def last_validation(table: Path) -> dict[str, dict[str, float]]:
     """Arm → its last validation row (F1, distinct patterns, entropy)."""
     rows: dict[str, dict[str, float]] = {}
@@ -78,7 +84,7 @@ def main() -> None:
     for job in jobs:
         metrics = json.loads((job / "metrics.json").read_text())
         config = yaml.safe_load((job / "config.yaml").read_text())
-        changed = [f"{text} {lookup(config, key)}" for key, (text, _) in OPTIONS.items() if lookup(config, key) != lookup(baseline, key)]
+        changed = [f"{text} {shown(lookup(config, key))}" for key, (text, _) in OPTIONS.items() if lookup(config, key) != lookup(baseline, key)]
         curve = validation.get(job.name, {})
         rows.append((curve.get("val/f1", float("nan")), job.name, changed, metrics, curve, diagnostics(args.folder / "diagnostics" / f"{job.name}.md")))
     rows.sort(key=lambda row: -row[0])
