@@ -39,11 +39,9 @@ from keyin.losses.soft_keyframe import (
     argmax_positions,
     gaussian_kl,
     interpolation_loss,
-    keyin_loss,
     offset_entropy,
     position_distributions,
 )
-from keyin.models.keyin import interpolator_offsets
 
 
 def true_offsets(keyframes: torch.Tensor, lengths: torch.Tensor, n_keyframes: int, max_offset: int) -> torch.Tensor:
@@ -77,17 +75,10 @@ def gradient_raises_true_offset(module, batch: dict, first_offset: torch.Tensor)
     """Fraction of clips whose own training loss, differentiated by keyframe 1's offset logits, raises
     the log-probability of its true offset (a step against the gradient g raises log p_a by
     η (Σ_b p_b g_b − g_a))."""
-    hp, model = module.hparams, module.model
     clips, lengths = batch["frames"], batch["future_length"]
-    out = model(clips, lengths, sample=False)
+    out = module.model(clips, lengths, sample=False)
     out["offset_logits"].retain_grad()
-    terms = keyin_loss(
-        out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, model.n_cond:].flatten(2),
-        gaussian_kl(out["mu"], out["log_sigma"]), lengths, hp.beta_ke, hp.beta_ki, hp.beta_kl, hp.normalize_key_targets,
-        pixel_weights=future_pixel_weights(module.pixel_weights(clips), model.n_cond),
-        reduction=hp.get("loss_reduction", "sum"), latent_dim=hp.latent_dim,
-    )
-    (terms["loss"] * clips.shape[0]).backward()  # the mean's gradient × B: each clip's own loss gradient
+    (module.soft_loss(clips, lengths, out)["loss"] * clips.shape[0]).backward()  # the mean's gradient × B: each clip's own loss gradient
     grad, probs = out["offset_logits"].grad[:, 0], out["offset_probs"][:, 0].detach()  # (B, S)
     rise = (probs * grad).sum(-1) - grad.gather(1, first_offset[:, None] - 1).squeeze(1)
     return (rise > 0).float().mean().item()
@@ -104,10 +95,8 @@ def diagnose(module, batch: dict, constant: int) -> dict[str, float]:
     with torch.no_grad():
         out = model(clips, lengths, sample=False)
         probs = out["offset_probs"]
-        soft = interpolator_offsets(probs, model.delta_input)
-        _, frame_pos = position_distributions(probs)
-        frames = model.interpolate(out["boundary_emb"][:, 0], out["key_emb"], soft)
-        loss, _, _ = interpolation_loss(frame_pos, frames, clips[:, n_cond:].flatten(2), lengths, pixel_weights)
+        _, frame_pos = position_distributions(probs)  # out["frames"]: interpolated as training reads δ (delta_input)
+        loss, _, _ = interpolation_loss(frame_pos, out["frames"], clips[:, n_cond:].flatten(2), lengths, pixel_weights)
         result["L_inter soft δ"] = loss.mean().item()
         patterns = {
             "argmax δ": probs.argmax(-1) + 1,

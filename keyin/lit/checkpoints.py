@@ -14,6 +14,7 @@ from keyin import __version__
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes
 from keyin.lit.legacy import current_model_name, upgrade_state_dict
+from keyin.models.keyin import STAGE1
 from keyin.pretrained import full_precision, resolve
 
 CONFIG_KEY = "keyin_config"
@@ -79,9 +80,6 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     return checkpoint
 
 
-STAGE1_NETWORKS = ("encoder.", "decoder.", "interpolator.")  # stage 1's networks inside a stage-2 ``model.``
-
-
 def load_stage1(path: str | Path) -> dict[str, Any]:
     """The stage-1 checkpoint that stage 2 starts from, or the frozen stage 1 inside a stage-2
     checkpoint (``pretrained:<name>`` included): ``hyper_parameters`` and ``state_dict`` of the
@@ -101,7 +99,7 @@ def load_stage1(path: str | Path) -> dict[str, Any]:
     networks = {
         name[len("model.") :]: value
         for name, value in checkpoint["state_dict"].items()
-        if name.startswith(tuple(f"model.{network}" for network in STAGE1_NETWORKS))
+        if name.startswith(tuple(f"model.{network}." for network in STAGE1))
     }
     return {"hyper_parameters": checkpoint["hyper_parameters"]["stage1"], "state_dict": networks}
 

@@ -123,16 +123,22 @@ class KeyframeModule(L.LightningModule):
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
         self.freeze_stage1()  # whatever switched modes since (REFERENCE §8.1)
 
-    def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> dict[str, torch.Tensor]:
-        clips, future_length = batch["frames"], batch["future_length"]
+    def soft_loss(self, clips: torch.Tensor, future_length: torch.Tensor, out: dict[str, torch.Tensor | None]) -> dict[str, torch.Tensor]:
+        """The paper's loss (:func:`keyin.losses.soft_keyframe.keyin_loss`) of a posterior forward ``out``
+        of (B, L, C, H, W) ``clips``, with this module's weights and reduction."""
         hp, n_cond = self.hparams, self.model.n_cond
-        out = self.model(clips, future_length)
-        terms = keyin_loss(
+        return keyin_loss(
             out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
             gaussian_kl(out["mu"], out["log_sigma"]), future_length, hp.beta_ke, hp.beta_ki, hp.beta_kl,
             hp.normalize_key_targets, pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
             reduction=hp.loss_reduction, latent_dim=hp.latent_dim,
         )
+
+    def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> dict[str, torch.Tensor]:
+        clips, future_length = batch["frames"], batch["future_length"]
+        hp = self.hparams
+        out = self.model(clips, future_length)
+        terms = self.soft_loss(clips, future_length, out)
         if stage == "train" and hp.entropy_bonus > 0:  # an aid the paper does not have (docs/decisions.md)
             weight = hp.entropy_bonus * max(0.0, 1.0 - self.global_step / hp.entropy_bonus_steps)
             terms["loss"] = terms["loss"] - weight * offset_entropy(out["offset_probs"]).mean()

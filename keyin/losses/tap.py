@@ -162,9 +162,9 @@ def min_over_time_bce(
     """
     if not admissible.any(dim=1).all():
         raise ValueError("a clip has no admissible frame for TAP's minimum over time; widen its (start, goal) pair")
-    excess = (frame_bce(logits, frames) - entropy_floor(frames)).masked_fill(~admissible, float("inf"))
-    argmin = excess.argmin(dim=1)
-    per_frame = frame_bce(logits, frames, weights)  # (B, L)
+    plain = frame_bce(logits, frames)  # (B, L)
+    argmin = (plain - entropy_floor(frames)).masked_fill(~admissible, float("inf")).argmin(dim=1)
+    per_frame = plain if weights is None else frame_bce(logits, frames, weights)
     return per_frame.gather(1, argmin[:, None]).squeeze(1), argmin
 
 

@@ -23,7 +23,7 @@ STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains a
 # What stage 2 freezes (an open choice: the paper writes "we freeze LSTM_inter weights and only use it to
 # backpropagate the error to the rest of the model"; REFERENCE §2.8 freezes all of stage 1):
 FROZEN_IN_STAGE2 = {
-    "stage1": ("encoder", "decoder", "interpolator"),  # everything stage 1 trained (our default)
+    "stage1": STAGE1,  # everything stage 1 trained (our default)
     "interpolator": ("interpolator",),  # MLP_init_inter and LSTM_inter; the encoder and decoder train on
     "lstm_inter": ("interpolator.lstm",),  # LSTM_inter alone, as the paper's sentence reads
 }
