@@ -37,8 +37,6 @@ def import_metaworld() -> Any:
         ImportError: metaworld is not installed (the message says how to install it).
         RuntimeError: metaworld's layout is not the one this fix was written for.
     """
-    # every expert's gain trips metaworld's "Constant(s) may be too high" warning; the env clips actions anyway
-    warnings.filterwarnings("ignore", message=r"Constant\(s\) may be too high", category=UserWarning)
     try:
         import metaworld
         import mujoco
@@ -143,7 +141,9 @@ class PhaseTracer:
         previous = sys.gettrace()
         sys.settrace(self._trace)
         try:
-            action = self.policy.get_action(obs.copy())  # some experts edit the observation in place
+            with warnings.catch_warnings():  # every expert's gain trips "Constant(s) may be too high"; the env clips
+                warnings.simplefilter("ignore", UserWarning)
+                action = self.policy.get_action(obs.copy())  # some experts edit the observation in place
         finally:
             sys.settrace(previous)
         if self.phase < 0:
