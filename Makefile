@@ -38,7 +38,7 @@ demo-keyin: $(STAMP)
 	$(BIN)/keyin-train experiment=brownian_keyin
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q --durations=30   # the 30 slowest tests with their times (issue 44)
+	$(BIN)/python -m pytest -q -n auto --dist loadfile --durations=30   # one worker per core, a test file per worker; the 30 slowest tests (issue 44)
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -m slow

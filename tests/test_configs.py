@@ -132,7 +132,8 @@ def test_every_job_of_every_table_composes(table):
             if sweep.program == "export":  # python -m keyin.cli.pretrained export CKPT... --folder DIR: argv, not overrides
                 args = list(sweep.overrides)
                 folder, checkpoints = args[args.index("--folder") + 1], [arg for arg in args if arg.endswith(".ckpt")]
-                assert sorted(sweep.creates) == sorted(f"{folder}/{Path(c).parents[2].name}.ckpt" for c in checkpoints)
+                names = [args[args.index("--name") + 1]] if "--name" in args else [Path(c).parents[2].name for c in checkpoints]
+                assert sorted(sweep.creates) == sorted(f"{folder}/{name}.ckpt" for name in names)  # --name, else the run dir's
                 continue
             split = (override.partition("=") for override in sweep.overrides if not override.startswith("hydra."))
             # every option of every key but the seed (seeds compose alike; the experiment tests sweep them)
