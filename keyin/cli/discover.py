@@ -111,9 +111,7 @@ def discover(cfg: DictConfig) -> dict:
     return summary
 
 
-@keyin_main("discover")
-def main(cfg: DictConfig) -> None:
-    discover(cfg)
+main = keyin_main("discover")(discover)  # the console script: Hydra, then discover(cfg)
 
 
 if __name__ == "__main__":

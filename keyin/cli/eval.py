@@ -133,9 +133,7 @@ def evaluate(cfg: DictConfig) -> dict:
     return metrics
 
 
-@keyin_main("eval")
-def main(cfg: DictConfig) -> None:
-    evaluate(cfg)
+main = keyin_main("eval")(evaluate)  # the console script: Hydra, then evaluate(cfg)
 
 
 if __name__ == "__main__":

@@ -130,9 +130,7 @@ def figures(cfg: DictConfig) -> dict[str, Any]:
     return numbers
 
 
-@keyin_main("figures")
-def main(cfg: DictConfig) -> None:
-    figures(cfg)
+main = keyin_main("figures")(figures)  # the console script: Hydra, then figures(cfg)
 
 
 if __name__ == "__main__":

@@ -41,9 +41,7 @@ def generate(cfg: DictConfig) -> dict:
     return stats
 
 
-@keyin_main("generate")
-def main(cfg: DictConfig) -> None:
-    generate(cfg)
+main = keyin_main("generate")(generate)  # the console script: Hydra, then generate(cfg)
 
 
 if __name__ == "__main__":

@@ -64,9 +64,7 @@ def import_command(cfg: DictConfig) -> dict:
     return stats
 
 
-@keyin_main("import")
-def main(cfg: DictConfig) -> None:
-    import_command(cfg)
+main = keyin_main("import")(import_command)  # the console script: Hydra, then import_command(cfg)
 
 
 if __name__ == "__main__":

@@ -130,9 +130,7 @@ def plan(cfg: DictConfig) -> dict:
     return metrics
 
 
-@keyin_main("plan")
-def main(cfg: DictConfig) -> None:
-    plan(cfg)
+main = keyin_main("plan")(plan)  # the console script: Hydra, then plan(cfg)
 
 
 if __name__ == "__main__":

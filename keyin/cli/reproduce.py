@@ -141,9 +141,7 @@ def reproduce(cfg: DictConfig) -> list[str]:
     return copied
 
 
-@keyin_main("reproduce")
-def main(cfg: DictConfig) -> None:
-    reproduce(cfg)
+main = keyin_main("reproduce")(reproduce)  # the console script: Hydra, then reproduce(cfg)
 
 
 if __name__ == "__main__":

@@ -133,9 +133,7 @@ def record_metrics(metrics: dict, cfg: DictConfig, folder: Path) -> dict:
     return metrics
 
 
-@keyin_main("train")
-def main(cfg: DictConfig) -> None:
-    train(cfg)
+main = keyin_main("train")(train)  # the console script: Hydra, then train(cfg)
 
 
 if __name__ == "__main__":
