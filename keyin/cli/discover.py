@@ -21,6 +21,7 @@ from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.eval.windowed import discover_videos
 from keyin.lit.registry import load_trained_module
+from keyin.lit.run import compile_frame_networks
 
 
 def check_discover(cfg: DictConfig) -> None:
@@ -95,6 +96,8 @@ def discover(cfg: DictConfig) -> dict:
     check_discover(cfg)
     module, trained = load_trained_module(cfg.ckpt, stage="keyframes")
     model = model_record(cfg, module, trained)
+    if cfg.compile:
+        compile_frame_networks(module)
     n_cond, n_future = model["n_cond"], model["n_future"]
     stride = window_stride(cfg, n_future)
     spec = ImportSpec(image_size=model["image_size"], channels=model["channels"], n_cond=n_cond, n_future=n_future,

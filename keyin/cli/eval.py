@@ -21,6 +21,7 @@ from keyin.decode.rules import SegmentationDiscoverer
 from keyin.eval.discovery import score_methods
 from keyin.eval.video import evaluate_video, save_prior_samples, save_rollouts
 from keyin.lit.registry import load_trained_module
+from keyin.lit.run import compile_frame_networks
 
 
 def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:
@@ -106,6 +107,8 @@ def evaluate(cfg: DictConfig) -> dict:
             except ValueError as err:
                 raise ConfigError(f"discovery={cfg.discovery}: {err}; pick among those") from None
         dataset = OmegaConf.create(trained["dataset"])  # the sizes the model was trained for
+        if cfg.compile:
+            compile_frame_networks(module)
     elif OmegaConf.select(cfg, "model") is None:
         raise ConfigError("choose what to evaluate: model=random|constant or ckpt=<checkpoint path>")
     elif cfg.model.trainable:
