@@ -20,16 +20,18 @@ install: $(STAMP)
 
 # The baselines and the pretrained KEYIN (docs/models.md) on the 1000 Brownian test clips, KEYIN's own
 # argmax offsets (the paper's readout), then keyin-discover on the bundled example video (its turns as
-# labels): runs/discover/<date>/<time>/brownian_example.gif/ holds keyframes.json and the pictures.
+# labels): runs/discover/<date>/<time>/brownian_example.gif/ holds keyframes.json and the pictures; last, a
+# short table of the three scores beside the paper's (keyin-report --brief).
 # (expanded when the recipe runs, after .venv exists)
 SHIPPED = $(shell $(BIN)/python -c 'import keyin.pretrained as p; print(p.FOLDER)')
 demo: $(STAMP)
 	$(BIN)/keyin-generate dataset=brownian 'splits={test: 1000}'
-	$(BIN)/keyin-eval model=random dataset=brownian
-	$(BIN)/keyin-eval model=constant dataset=brownian
-	$(BIN)/keyin-eval ckpt=pretrained:brownian 'discovery=[offsets]'
+	$(BIN)/keyin-eval model=random dataset=brownian hydra.run.dir=runs/demo/random
+	$(BIN)/keyin-eval model=constant dataset=brownian hydra.run.dir=runs/demo/constant
+	$(BIN)/keyin-eval ckpt=pretrained:brownian 'discovery=[offsets]' hydra.run.dir=runs/demo/keyin
 	$(BIN)/keyin-discover ckpt=pretrained:brownian input=$(SHIPPED)/brownian_example.gif \
 	  labels=$(SHIPPED)/brownian_example_labels.json fps=10
+	$(BIN)/keyin-report runs/demo/random runs/demo/constant runs/demo/keyin --brief
 
 # KEYIN with our additions (model=keyin_plus) on Brownian at scale=cpu, both stages, then its keyframe
 # F1 on the 1000 test clips; the paper's KEYIN: keyin-train experiment=brownian_keyin model=keyin backbone=paper

@@ -35,6 +35,7 @@ from keyin.eval.planning_report import (
     sweep_threshold,
 )
 from keyin.eval.report import (
+    brief_table,
     collect_metrics,
     csv_table,
     is_planning,
@@ -188,6 +189,8 @@ def main(argv: list[str] | None = None) -> None:
                              "method and seed, and a method with the same seed in two of them is refused")
     parser.add_argument("--out", type=Path, default=None, help="output dir (default: <first sweep>/report)")
     parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures")
+    parser.add_argument("--brief", action="store_true",
+                        help="print a short table (method, F1 interior, the paper's F1, its metrics.json) and write no files")
     parser.add_argument("--threshold", type=float, default=None,
                         help="Table 2's success threshold in world units (default: the one the jobs used)")
     args = parser.parse_args(argv)
@@ -195,6 +198,9 @@ def main(argv: list[str] | None = None) -> None:
         if not folder.is_dir():
             fail(f"{folder} is not a directory; pass the sweep dir of keyin-train -m or keyin-plan -m")
     try:
+        if args.brief:
+            print(brief_table(collect_metrics(args.sweep)))
+            return
         for path in report(args.sweep, args.out or args.sweep[0] / "report", args.examples, args.threshold):
             print(f"wrote {path}")
     except (KeyinError, ValueError) as err:

@@ -188,6 +188,20 @@ def _minutes(row: TableRow) -> str:
     return minutes
 
 
+def brief_table(records: list[dict[str, Any]]) -> str:
+    """What a person reads after a demo: per method its interior F1 (mean ± std over seeds), the
+    paper's F1 and the metrics.json files it comes from."""
+    paths: dict[tuple[str, str], list[str]] = {}
+    for record in records:
+        paths.setdefault((record["dataset"], record["method"]), []).append(f"{record['path']}/metrics.json")
+    lines = ["| dataset | method | F1 interior | F1 (paper) | metrics |", "|---|---|---|---|---|"]
+    for row in summarise(records):
+        files = ", ".join(sorted(set(paths[(row.dataset, row.method)])))
+        lines.append(f"| {row.dataset} | {row.method} | {_spread(row.mean['f1_interior'], row.std['f1_interior'])} | "
+                     f"{_paper(row.paper_f1)} | {files} |")
+    return "\n".join(lines)
+
+
 def markdown_table(rows: list[TableRow]) -> str:
     """Table 1 as Markdown: F1 mean ± std over seeds in the information rule's two columns
     (interior, with ends; docs/evaluation.md) and as the method gives its keyframes, the paper's F1,

@@ -130,3 +130,13 @@ def test_wall_times_average_the_seeds_that_recorded_them_and_name_those(tmp_path
     rows = markdown_table(summarise(collect_metrics(tmp_path))).splitlines()
     assert rows[2].startswith("| brownian | static |") and rows[2].endswith("| – | 1 |")
     assert rows[3].startswith("| brownian | keyin_paper |") and rows[3].endswith("| 20.0 + 0.5 (seeds 1, 2) | 3 |")
+
+
+def test_brief_prints_each_methods_f1_beside_the_papers_and_writes_nothing(sweep, capsys):
+    report.main([str(sweep), "--brief"])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "| dataset | method | F1 interior | F1 (paper) | metrics |"
+    keyin_plus = next(line for line in lines if "| keyin_plus |" in line)
+    assert "| 0.550 ± 0.100 | 0.84 |" in keyin_plus  # interior F1 0.45, 0.55, 0.65 over seeds 0-2
+    assert all(f"{sweep}/keyin_plus_seed{seed}/metrics.json" in keyin_plus for seed in range(3))
+    assert not (sweep / "report").exists()
