@@ -8,7 +8,7 @@ Models: smoke-sized keyin_plus (untrained weights: the speed does not depend on 
 sizes (32x32 grey, 5 + 30 frames, M 6, S 10) and at pushing's (64x64 RGB, 1 + 30, M 6, S 6), and
 with ``--ckpt`` a trained checkpoint, whose merged keyframes are also scored against the clip's
 turns. Every model runs the default rule (map with the label-free knee) through
-``keyin.eval.windowed.discover_videos``, as keyin-discover does; the parts are timed by wrapping
+``keyin.pipelines.discover.discover_videos``, as keyin-discover does; the parts are timed by wrapping
 the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
 ``KEYIN.keyframes`` (encoder and posterior, run by the rule and by the score), the interpolator's
 segment costs, the DP, and the files (JSON and pictures).
@@ -36,21 +36,21 @@ from hydra.utils import instantiate
 
 import keyin.decode.rules
 import keyin.decode.segmentation
-import keyin.eval.windowed
+import keyin.pipelines.discover
 from common import cpu_model, publish
 from keyin.cli.app import CONFIG_MODULE
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.eval.f1 import keyframe_scores
-from keyin.eval.windowed import discover_videos
 from keyin.lit.registry import load_trained_module
 from keyin.models.keyin import KEYIN
+from keyin.pipelines.discover import discover_videos
 
 PARTS = {  # part -> (owner, attribute) of the function timed
     "encoder + posterior": (KEYIN, "keyframes"),
     "segment costs": (keyin.decode.rules, "interpolation_costs"),
     "DP": (keyin.decode.segmentation, "best_segmentation"),
-    "files": (keyin.eval.windowed, "write_video_folder"),
+    "files": (keyin.pipelines.discover, "write_video_folder"),
 }
 
 
@@ -159,7 +159,7 @@ def main() -> None:
         f"- machine: {cpu_model()}, {os.cpu_count()} logical cores, {args.threads} thread(s) used, torch "
         f"{torch.__version__}, {date.today().isoformat()}",
         *([f"- note: {args.note}"] if args.note else []),
-        "- path: keyin.eval.windowed.discover_videos with rule map and the label-free knee, windows every n_future // 2 "
+        "- path: keyin.pipelines.discover.discover_videos with rule map and the label-free knee, windows every n_future // 2 "
         "kept frames (each frame in about two windows), batches of 32 windows, frame stride 1",
         "",
         "| model | kept frames / windows | frames/s (model) | frames/s (all) | decode | encoder + posterior | "

@@ -19,9 +19,9 @@ from keyin.data.labels import check_known, read_labels
 from keyin.decode.rules import KEYIN_RULES
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
-from keyin.eval.windowed import discover_videos
 from keyin.lit.registry import load_trained_module
 from keyin.lit.run import compile_frame_networks
+from keyin.pipelines.discover import discover_videos
 
 
 def check_discover(cfg: DictConfig) -> None:

@@ -16,12 +16,12 @@ from keyin.cli.checks import check_common, require_int_at_least, require_positiv
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import read_manifest, split_files
 from keyin.data.imports import clip_origins
-from keyin.errors import ConfigError
 from keyin.decode.rules import SegmentationDiscoverer
+from keyin.errors import ConfigError
 from keyin.eval.discovery import score_methods
-from keyin.eval.video import evaluate_video, save_prior_samples, save_rollouts
 from keyin.lit.registry import load_trained_module
 from keyin.lit.run import compile_frame_networks
+from keyin.pipelines.video import evaluate_video, save_prior_samples, save_rollouts
 
 
 def eval_files(cfg: DictConfig, dataset_name: str) -> list[Path]:

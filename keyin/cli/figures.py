@@ -21,11 +21,11 @@ from keyin.cli.eval import eval_clips, eval_files
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import load_arrays
 from keyin.errors import ConfigError
-from keyin.eval.figures import MODES, save_comparison, save_trajectory_figure
-from keyin.eval.video import save_prior_samples
 from keyin.io import atomic_write_text
 from keyin.lit.registry import load_trained_module
 from keyin.models import KEYIN
+from keyin.pipelines.figures import MODES, save_comparison, save_trajectory_figure
+from keyin.pipelines.video import save_prior_samples
 
 # figure -> what its file is called after
 FIGURES = {"fig4": "reconstructions", "fig5": "prior_samples", "fig6": "trajectories", "fig7": "predictions"}

@@ -6,14 +6,11 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, Dataset
 
 from keyin.envs.geometry import apply_homography, end_side, passing_side, side_fractions, top_view_homography
 from keyin.envs.segmentation import puck_centroid
-from keyin.eval.video import predict
-from keyin.models import KEYIN
 
 
 def puck_tracks(videos: Tensor) -> np.ndarray:
@@ -43,22 +40,6 @@ def track_sides(tracks: np.ndarray, walls: np.ndarray, image_size: int) -> list[
     """
     walls = np.broadcast_to(walls, (len(tracks), 5))
     return [passing_side(track, wall) for track, wall in zip(to_world(tracks, image_size), walls)]
-
-
-@torch.no_grad()
-def sample_videos(model: KEYIN, clip: dict[str, Tensor], count: int) -> Tensor:
-    """``count`` futures of one clip drawn from the prior given its conditioning frames.
-
-    Args:
-        model: a trained :class:`keyin.models.KEYIN` in eval mode.
-        clip: an item of :class:`keyin.data.clips.ShardClips` (``frames`` (L, C, H, W),
-            ``future_length`` ()).
-    Returns:
-        (count, L, C, H, W) the conditioning frames, then each sample's argmax-offset video.
-    """
-    frames = clip["frames"].expand(count, *clip["frames"].shape)
-    video, _ = predict(model, frames, clip["future_length"].expand(count), "prior", sample=True)
-    return video
 
 
 def demonstration_sides(clips: Dataset, walls: np.ndarray, sides: np.ndarray, batch_size: int) -> dict[str, Any]:

@@ -1,6 +1,6 @@
 """The paper's Fig. 4, 6 and 7 from trained KEYIN models (KEYIN, Jumpy): the predictions, the
 numbers each figure shows, and its PNG (drawn by :mod:`keyin.viz.figures`). Fig. 5/10, the prior
-samples, is :func:`keyin.eval.video.save_prior_samples`."""
+samples, is :func:`keyin.pipelines.video.save_prior_samples`."""
 
 from __future__ import annotations
 
@@ -9,19 +9,37 @@ from typing import Any, Mapping
 
 import numpy as np
 import torch
+from torch import Tensor
 from torch.utils.data import Dataset
 
 from keyin.data.pushing import PushingGenerator
 from keyin.envs.geometry import apply_homography, passing_side, side_fractions, top_view_homography, wall_corners
 from keyin.envs.layout import Layout
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
-from keyin.eval.trajectories import demonstration_sides, puck_tracks, sample_videos, track_sides
-from keyin.eval.video import METRICS, first_clips, predict_futures
+from keyin.eval.trajectories import demonstration_sides, puck_tracks, track_sides
+from keyin.eval.video import METRICS
 from keyin.models import KEYIN
+from keyin.pipelines.video import first_clips, predict, predict_futures
 from keyin.viz.figures import save_labeled_strips, save_trajectories
 from keyin.viz.keyframes import marked_frames
 
 MODES = ("prior", "posterior")
+
+
+@torch.no_grad()
+def sample_videos(model: KEYIN, clip: dict[str, Tensor], count: int) -> Tensor:
+    """``count`` futures of one clip drawn from the prior given its conditioning frames.
+
+    Args:
+        model: a trained :class:`keyin.models.KEYIN` in eval mode.
+        clip: an item of :class:`keyin.data.clips.ShardClips` (``frames`` (L, C, H, W),
+            ``future_length`` ()).
+    Returns:
+        (count, L, C, H, W) the conditioning frames, then each sample's argmax-offset video.
+    """
+    frames = clip["frames"].expand(count, *clip["frames"].shape)
+    video, _ = predict(model, frames, clip["future_length"].expand(count), "prior", sample=True)
+    return video
 
 
 @torch.no_grad()

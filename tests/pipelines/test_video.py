@@ -1,4 +1,4 @@
-"""Video-prediction diagnostics (keyin/eval/video.py): per-frame PSNR/SSIM over valid frames, best of k."""
+"""Video-prediction diagnostics (keyin/pipelines/video.py, scored by keyin/eval/video.py): per-frame PSNR/SSIM over valid frames, best of k."""
 
 import math
 
@@ -6,8 +6,9 @@ import imageio.v3 as iio
 import pytest
 import torch
 
-from keyin.eval.video import PSNR_CAP, Futures, clip_scores, save_prior_samples, save_rollouts, score_batch, summarize
+from keyin.eval.video import PSNR_CAP, clip_scores, summarize
 from keyin.models import KEYIN
+from keyin.pipelines.video import Futures, save_prior_samples, save_rollouts, score_batch
 from tests.lit.test_keyframe_teacher import keyframe_module
 
 LENGTHS = torch.tensor([4, 2])  # valid future frames of the two clips (N = 4)
