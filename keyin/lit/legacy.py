@@ -14,12 +14,18 @@ MODEL_NETWORKS = {
 }
 
 
+# Parameters renamed since they were saved: Static's offset logits became its offset head's (issue 49).
+RENAMED_PARAMETERS = {"model.predictor.static_offset_logits": "model.predictor.offset_head.logits"}
+
+
 def upgrade_state_dict(state_dict: Mapping[str, Any], stage: str) -> dict[str, Any]:
     """A state dict of ``stage`` in this version's layout (``model.encoder.*``, ...): one in the old
-    layout (``encoder.*``, ...; :data:`MODEL_NETWORKS`) is renamed, one of today, or of a stage
-    without a model, is returned as it is."""
+    layout (``encoder.*``, ...; :data:`MODEL_NETWORKS`) is moved under ``model.`` and the parameters
+    of :data:`RENAMED_PARAMETERS` take their new names; one of today, or of a stage without a model,
+    is returned as it is."""
     networks = MODEL_NETWORKS.get(stage, ())
-    return {f"model.{name}" if name.startswith(networks) else name: value for name, value in state_dict.items()}
+    moved = {f"model.{name}" if name.startswith(networks) else name: value for name, value in state_dict.items()}
+    return {RENAMED_PARAMETERS.get(name, name): value for name, value in moved.items()}
 
 
 def current_model_name(name: str | None, versioned: bool) -> str | None:

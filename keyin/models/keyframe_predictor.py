@@ -1,7 +1,7 @@
 """The keyframe predictor: LSTM_cond, LSTM_inf + attention posterior, LSTM_key (REFERENCE §2.3a, §2.4).
 
 Also the Static and Jumpy baselines, which differ only in where the offset distributions come from
-(`offset_mode`).
+(`offset_mode`, :mod:`keyin.models.offset_heads`).
 """
 
 from typing import NamedTuple
@@ -13,18 +13,15 @@ from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
 from keyin.losses.soft_keyframe import initial_position, shifted_positions
 from keyin.models.attention import attention_posterior
+from keyin.models.offset_heads import offset_head
 from keyin.models.recurrent import LSTMBlock, init_forget_bias
 
-OFFSET_MODES = ("predicted", "static", "fixed")
 MODES = ("posterior", "prior")
 # How keyframe t's offset evidence places keyframe t - 1: "soft" at D^{t-1} (the soft loss's
 # expected position, training), "argmax" where the argmax offsets put it (the readout's own chain);
 # or (B, M) given offsets (a teacher's: teacher forcing of the previous keyframe's position).
 CHAINS = ("soft", "argmax")
 Chain = str | Tensor
-# Logit of the impossible offsets in "fixed" mode: softmax gives an exact one-hot, and unlike −∞ it
-# keeps log-softmax and entropy (0 · log 0) finite.
-FIXED_OFFSET_OFF_LOGIT = -1.0e4
 
 
 class KeyframeOutput(NamedTuple):
@@ -102,12 +99,6 @@ class KeyframePredictor(nn.Module):
         super().__init__()
         if offset_evidence and offset_mode != "predicted":
             raise ValueError("offset_evidence needs offset_mode='predicted'")
-        if offset_mode not in OFFSET_MODES:
-            raise ValueError(f"offset_mode must be one of {OFFSET_MODES}, got {offset_mode!r}")
-        if (offset_mode == "fixed") != (fixed_offset is not None):
-            raise ValueError("fixed_offset is required by offset_mode='fixed' and only allowed with it")
-        if fixed_offset is not None and not 1 <= fixed_offset <= max_offset:
-            raise ValueError(f"fixed_offset must be in 1..max_offset={max_offset}, got {fixed_offset}")
         self.embed_dim = embed_dim
         self.n_keyframes = n_keyframes
         self.max_offset = max_offset
@@ -140,12 +131,7 @@ class KeyframePredictor(nn.Module):
 
         self.key_lstm = LSTMBlock(latent_dim + embed_dim, None, hidden, layers, learn_initial_state=False)
         self.key_head = nn.Linear(hidden, embed_dim)
-        # Unused offset parameters would get no gradient (and break DDP), so each mode builds only its own.
-        self.offset_head = nn.Linear(hidden, max_offset) if offset_mode == "predicted" else None
-        if offset_mode == "static":
-            self.static_offset_logits = nn.Parameter(torch.zeros(n_keyframes, max_offset))
-        else:
-            self.register_parameter("static_offset_logits", None)
+        self.offset_head = offset_head(offset_mode, hidden, n_keyframes, max_offset, fixed_offset)
 
     def infer(self, future_emb: Tensor, lengths: Tensor | None) -> tuple[Tensor, Tensor, Tensor, Tensor | None]:
         """LSTM_inf: attention keys and values (and boundary scores) for every future frame.
@@ -177,23 +163,6 @@ class KeyframePredictor(nn.Module):
         values = self.inference_value_head(features)  # (B, N, 2Zk)
         scores = self.boundary_head(features).squeeze(-1) if self.boundary_head is not None else None
         return keys, values, mask, scores
-
-    def _offset_logits(self, hidden_outputs: Tensor) -> Tensor:
-        """Offset logits of every keyframe for the configured offset mode.
-
-        Args:
-            hidden_outputs: (B, M, hidden) LSTM_key outputs.
-        Returns:
-            (B, M, S).
-        """
-        batch_size = hidden_outputs.shape[0]
-        if self.offset_mode == "predicted":
-            return self.offset_head(hidden_outputs)
-        if self.offset_mode == "static":
-            return self.static_offset_logits.expand(batch_size, -1, -1)
-        logits = hidden_outputs.new_full((self.max_offset,), FIXED_OFFSET_OFF_LOGIT)  # (S,)
-        logits[self.fixed_offset - 1] = 0.0
-        return logits.expand(batch_size, self.n_keyframes, -1)
 
     def _extended_scores(self, scores: Tensor, mask: Tensor, length: int) -> tuple[Tensor, Tensor]:
         """Boundary logits on the extended index (index k = future position k - 1; K^0 and every
@@ -334,7 +303,7 @@ class KeyframePredictor(nn.Module):
             log_sigmas.append(log_sigma)
             latents.append(latent)
 
-        head_logits = offset_logits = self._offset_logits(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
+        head_logits = offset_logits = self.offset_head(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
         if boundary_scores is not None:
             offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask, chain)
         return KeyframeOutput(

@@ -89,3 +89,11 @@ def test_lightning_resumes_a_surprise_checkpoint_from_before_the_svg_model(tmp_p
         SurpriseModule(**module.hparams), loader, ckpt_path=before_the_svg_model(tmp_path / "old.ckpt"), verbose=False
     )
     assert restored == expected
+
+
+def test_statics_offset_logits_saved_before_the_offset_heads_load_under_their_new_name():
+    logits = torch.randn(6, 10)
+    for saved in ("model.predictor.static_offset_logits", "predictor.static_offset_logits"):  # 0.2, and 0.1's layout
+        upgraded = upgrade_state_dict({saved: logits, "model.predictor.key_head.bias": torch.zeros(3)}, "keyframes")
+        assert set(upgraded) == {"model.predictor.offset_head.logits", "model.predictor.key_head.bias"}
+        assert upgraded["model.predictor.offset_head.logits"] is logits

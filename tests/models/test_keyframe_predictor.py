@@ -177,16 +177,16 @@ def test_frames_beyond_lengths_are_masked_and_ignored():
 def test_static_offsets_are_shared_by_all_sequences():
     predictor = make_predictor(offset_mode="static")
     with torch.no_grad():
-        predictor.static_offset_logits.normal_()
+        predictor.offset_head.logits.normal_()
     cond_emb, future_emb = make_embeddings()
 
     output = predictor(cond_emb, future_emb)
     other = predictor(-cond_emb, future_emb.flip(1))
 
-    expected = torch.softmax(predictor.static_offset_logits, -1).expand(BATCH, -1, -1)
+    expected = torch.softmax(predictor.offset_head.logits, -1).expand(BATCH, -1, -1)
     torch.testing.assert_close(output.offset_probs, expected)
     torch.testing.assert_close(other.offset_probs, expected)
-    assert predictor.offset_head is None
+    assert [name for name, _ in predictor.offset_head.named_parameters()] == ["logits"]
 
 
 @pytest.mark.parametrize("fixed_offset", [1, 3, MAX_OFFSET])
@@ -200,7 +200,7 @@ def test_fixed_offsets_are_one_hot(fixed_offset):
     expected[..., fixed_offset - 1] = 1.0
     assert torch.equal(output.offset_probs, expected)
     assert torch.isfinite(torch.log_softmax(output.offset_logits, -1)).all()
-    assert predictor.offset_head is None and predictor.static_offset_logits is None
+    assert not list(predictor.offset_head.parameters())  # a fixed one-hot: nothing to learn
 
 
 @pytest.mark.parametrize(
