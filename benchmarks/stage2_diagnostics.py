@@ -35,13 +35,9 @@ from keyin.decode.segmentation import segmentation_offsets
 from keyin.eval.f1 import keyframe_lists, keyframe_scores
 from keyin.lit.registry import load_trained_module
 from keyin.losses.image import future_pixel_weights
-from keyin.losses.soft_keyframe import (
-    argmax_positions,
-    gaussian_kl,
-    interpolation_loss,
-    offset_entropy,
-    position_distributions,
-)
+from keyin.losses.soft_keyframe import interpolation_loss, offset_entropy
+from keyin.models.distributions import gaussian_kl
+from keyin.models.positions import argmax_positions, position_distributions
 
 
 def true_offsets(keyframes: torch.Tensor, lengths: torch.Tensor, n_keyframes: int, max_offset: int) -> torch.Tensor:

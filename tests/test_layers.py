@@ -9,7 +9,7 @@ import keyin
 
 PACKAGE = Path(keyin.__file__).parent
 ENTRY_LAYERS = ("keyin.lit", "keyin.planning", "keyin.pipelines", "keyin.cli")
-# package -> what it must not import: cli -> pipelines -> lit/planning -> eval -> decode -> models/losses -> data/envs.
+# package -> what it must not import: cli -> pipelines -> lit/planning -> eval -> decode -> losses -> models -> data/envs.
 # Allowed within the middle row: lit/ -> eval/ (validation F1) and planning/ -> lit/ (loading checkpoints), planning/ -> eval/.
 BELOW_DECODE = (*ENTRY_LAYERS, "keyin.eval", "keyin.viz", "keyin.decode")
 BANNED = {
@@ -20,8 +20,8 @@ BANNED = {
     "keyin.viz": (*ENTRY_LAYERS, "keyin.eval"),
     "keyin.eval": ENTRY_LAYERS,
     "keyin.decode": (*ENTRY_LAYERS, "keyin.eval", "keyin.viz"),
-    "keyin.models": BELOW_DECODE,
-    "keyin.losses": (*BELOW_DECODE, "keyin.models"),
+    "keyin.models": (*BELOW_DECODE, "keyin.losses"),  # losses score what the models compute, on their positions
+    "keyin.losses": BELOW_DECODE,
     "keyin.data": BELOW_DECODE,
     "keyin.envs": BELOW_DECODE,
 }

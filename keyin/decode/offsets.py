@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from keyin.losses.soft_keyframe import argmax_positions, position_distributions
+from keyin.models.positions import argmax_positions, position_distributions
 
 
 def offset_keyframes(offset_probs: Tensor, future_length: Tensor) -> list[list[int]]:

@@ -11,7 +11,7 @@ import torch
 from torch import Tensor
 from torchmetrics.functional.image import peak_signal_noise_ratio, structural_similarity_index_measure
 
-from keyin.losses.soft_keyframe import valid_frame_mask
+from keyin.models.positions import valid_frame_mask
 
 PSNR_CAP = 100.0
 """dB, the PSNR of an exact match (MSE 0 gives +inf): means and the best of k stay finite."""

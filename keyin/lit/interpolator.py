@@ -22,8 +22,8 @@ from keyin.data.segments import partition_segments, valid_frames
 from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
-from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models import InterpolatorPosterior
+from keyin.models.distributions import gaussian_kl
 from keyin.models.interpolator import interpolate_segments
 from keyin.models.keyin import stage1_networks
 

@@ -21,9 +21,11 @@ from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.legacy import upgrade_state_dict
 from keyin.lit.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights
-from keyin.losses.soft_keyframe import REDUCTIONS, argmax_positions, gaussian_kl, keyin_loss, offset_entropy
+from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
+from keyin.models.distributions import gaussian_kl
 from keyin.models.keyin import FROZEN_IN_STAGE2, stage1_networks
+from keyin.models.positions import argmax_positions
 
 
 class KeyframeModule(L.LightningModule):

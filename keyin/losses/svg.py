@@ -13,7 +13,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from keyin.losses.soft_keyframe import gaussian_kl
+from keyin.models.distributions import gaussian_kl
 
 
 class SVGTerms(NamedTuple):

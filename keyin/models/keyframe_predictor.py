@@ -11,9 +11,9 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
-from keyin.losses.soft_keyframe import initial_position, shifted_positions
 from keyin.models.attention import attention_posterior
 from keyin.models.offset_heads import offset_head
+from keyin.models.positions import initial_position, shifted_positions
 from keyin.models.recurrent import LSTMBlock, init_forget_bias
 
 MODES = ("posterior", "prior")

@@ -14,10 +14,10 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from keyin.losses.soft_keyframe import argmax_frames
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
+from keyin.models.positions import argmax_frames
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
 # What stage 2 freezes (an open choice: the paper writes "we freeze LSTM_inter weights and only use it to

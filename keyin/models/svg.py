@@ -13,8 +13,8 @@ from typing import NamedTuple
 import torch
 from torch import Tensor, nn
 
-from keyin.losses.soft_keyframe import gaussian_kl
 from keyin.models.conv import ConvDecoder, ConvEncoder
+from keyin.models.distributions import gaussian_kl
 from keyin.models.recurrent import LSTMBlock
 
 

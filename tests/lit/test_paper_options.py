@@ -7,10 +7,11 @@ import torch
 
 from keyin.lit.checkpoints import load_checkpoint, load_stage1
 from keyin.lit.interpolator import InterpolatorModule
-from keyin.lit.registry import load_trained_module
 from keyin.lit.keyframes import KeyframeModule
-from keyin.losses.soft_keyframe import interpolation_loss, keyin_loss, offset_entropy, position_distributions
+from keyin.lit.registry import load_trained_module
+from keyin.losses.soft_keyframe import interpolation_loss, keyin_loss, offset_entropy
 from keyin.models.keyin import interpolator_offsets
+from keyin.models.positions import position_distributions
 from tests.lit.test_keyframe_teacher import STAGE1, batch
 
 

@@ -7,17 +7,9 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from keyin.losses.soft_keyframe import (
-    argmax_frames,
-    argmax_positions,
-    bce_sum,
-    gaussian_kl,
-    in_sequence_probs,
-    keyin_loss,
-    position_distributions,
-    soft_frames,
-    soft_keyframe_targets,
-)
+from keyin.losses.soft_keyframe import bce_sum, in_sequence_probs, keyin_loss, soft_keyframe_targets
+from keyin.models.distributions import gaussian_kl
+from keyin.models.positions import argmax_frames, argmax_positions, position_distributions, soft_frames
 
 ATOL = 1e-10
 BETAS = {"beta_ke": 1.0, "beta_ki": 0.7, "beta_kl": 0.05}

@@ -3,8 +3,10 @@
 import torch
 import torch.nn.functional as F
 
-from keyin.losses.soft_keyframe import argmax_frames, gaussian_kl, keyin_loss
+from keyin.losses.soft_keyframe import keyin_loss
 from keyin.models import KeyframePredictor
+from keyin.models.distributions import gaussian_kl
+from keyin.models.positions import argmax_frames
 
 E, M, S, N, Z, D = 8, 6, 10, 30, 4, 12
 
