@@ -231,11 +231,14 @@ def paired_success_difference(first: PlanningRow, second: PlanningRow, threshold
     return {"difference": float(differences.mean()), "low": low, "high": high, "n_tasks": len(common)}
 
 
-DIFFERENCE_PAIRS = (("keyin_paper", "jumpy"), ("keyin_plus", "jumpy"), ("keyin_plus", "keyin_paper"))
+DIFFERENCE_PAIRS = (
+    ("keyin_paper", "jumpy"), ("keyin_plus", "jumpy"), ("keyin_plus", "keyin_paper"),
+    ("surprise", "jumpy"), ("keyin_paper", "surprise"), ("tap", "no_subgoals"),  # the baselines' order (issue 45)
+)
 
 
 def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[tuple[str, str], ...] = DIFFERENCE_PAIRS) -> str:
-    """One line per pair of planners (KEYIN − Jumpy, ours − the paper's) that are both in ``rows``:
+    """One line per pair of planners (KEYIN − Jumpy, ours − the paper's, the baselines' order) that are both in ``rows``:
     the success difference in points with its paired interval; empty if none is."""
     by_name = {row.planner: row for row in rows}
     lines = []

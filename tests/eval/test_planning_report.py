@@ -159,6 +159,13 @@ def test_the_paired_difference_counts_only_the_tasks_both_played(tmp_path):
     assert difference_markdown([rows["keyin_plus"]], 0.66) == ""
 
 
+def test_the_baselines_are_paired_too(tmp_path):
+    write_job(tmp_path, "tap", 0, [0.1, 1.0, 0.1])
+    write_job(tmp_path, "no_subgoals", 0, [1.0, 1.0, 1.0])
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert difference_markdown(rows, 0.66).startswith("- tap − no_subgoals success: +66.7 points")
+
+
 def test_a_servo_setting_is_its_own_row_and_the_sensitivity_table_pairs_the_tasks(tmp_path):
     write_job(tmp_path, "jumpy", 0, [0.1, 0.1, 1.0, 0.1])  # no setting recorded: state, servo steps
     write_job(tmp_path, "jumpy", 0, [0.1, 1.0, 1.0], servo_observe="pixels", servo_action_repeat=2)  # tasks 0-2
