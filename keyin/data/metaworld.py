@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from keyin.envs.metaworld import PhaseTracer, Timing, debounced_switches, expert, make_env, run_episode
+from keyin.envs.metaworld import PhaseTracer, Timing, check_tasks, debounced_switches, expert, make_env, run_episode
 
 # the experts that succeed under every timing lever (assembly and peg-insert-side re-enter their phases and often fail)
 DEFAULT_TASKS = ("pick-place-v3", "push-v3", "door-open-v3", "drawer-open-v3", "button-press-topdown-v3")
@@ -48,6 +48,7 @@ class MetaWorldGenerator:
         if self.frame_skip < 1 or self.n_future < 1 or self.tail_frames < 0:
             raise ValueError("frame_skip and n_future must be >= 1 and tail_frames >= 0")
         object.__setattr__(self, "tasks", tuple(self.tasks))
+        check_tasks(self.tasks)
         box = None if self.hand_low is None else tuple(self.hand_low), None if self.hand_high is None else tuple(self.hand_high)
         object.__setattr__(self, "hand_low", box[0])
         object.__setattr__(self, "hand_high", box[1])

@@ -64,6 +64,20 @@ def import_metaworld() -> Any:
     return metaworld
 
 
+def check_tasks(tasks: tuple[str, ...]) -> None:
+    """Refuse task names Meta-World does not have or whose expert keyin cannot read phases from.
+
+    Raises:
+        ValueError: naming the unknown tasks and the known ones.
+    """
+    from metaworld.policies import ENV_POLICY_MAP
+
+    known = sorted(set(import_metaworld().ALL_V3_ENVIRONMENTS) & set(ENV_POLICY_MAP))
+    unknown = [task for task in tasks if task not in known]
+    if unknown:
+        raise ValueError(f"unknown Meta-World task(s) {unknown}; the tasks with an expert are {known}")
+
+
 def make_env(task: str, max_steps: int) -> Any:
     """Meta-World's ``task`` (e.g. ``"pick-place-v3"``) with the goal observed (the experts need it),
     a fresh object and goal placement drawn at every ``reset()`` from ``env.np_random``, and an

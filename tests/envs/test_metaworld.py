@@ -1,6 +1,8 @@
 """Meta-World's experts as a dataset: the phase labels read from each expert's if/elif chain, the
 switch rule, the weld and observation fixes, and the clips (known answers, determinism, shapes)."""
 
+import sys
+
 import numpy as np
 import pytest
 from hydra import compose, initialize_config_module
@@ -124,3 +126,14 @@ def test_the_config_builds_the_generator():
 def test_unknown_task_is_named():
     with pytest.raises(ValueError, match="unknown Meta-World task 'pick-plaec-v3'"):
         make_env("pick-plaec-v3", 10)
+
+
+def test_unknown_tasks_are_refused_with_the_known_ones():
+    with pytest.raises(ValueError, match=r"unknown Meta-World task\(s\) \['pick-plaec-v3'\]; the tasks with an expert are \[.*'pick-place-v3'"):
+        MetaWorldGenerator(tasks=("push-v3", "pick-plaec-v3"))
+
+
+def test_a_missing_metaworld_install_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "metaworld", None)  # as if not installed
+    with pytest.raises(ImportError, match=r"pip install 'metaworld==3.0.0' packaging \(or pip install 'keyin\[sim\]'\)"):
+        import_metaworld()
