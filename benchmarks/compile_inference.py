@@ -10,11 +10,10 @@ from __future__ import annotations
 import argparse
 import time
 from datetime import date
-from pathlib import Path
 
 import torch
 
-from common import cpu_model, publish, split_batch
+from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.lit.registry import load_trained_module
 from keyin.lit.run import compile_frame_networks
 
@@ -28,15 +27,12 @@ def discovered(module: torch.nn.Module, batch: dict, rule: str, batch_size: int)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=200)
+    parser.set_defaults(split="test")  # a speed measurement, no choice made
     parser.add_argument("--ckpt", default="pretrained:brownian")
-    parser.add_argument("--clips", type=int, default=200)
-    parser.add_argument("--split", default="test")
-    parser.add_argument("--data-dir", default="data")
     parser.add_argument("--rule", default="map")
     parser.add_argument("--batch-size", type=int, default=100)
     parser.add_argument("--threads", type=int, default=1)
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     module, config = load_trained_module(args.ckpt)

@@ -14,12 +14,11 @@ from __future__ import annotations
 import argparse
 import time
 from datetime import date
-from pathlib import Path
 
 import torch
 import torch.nn.functional as F
 
-from common import cpu_model, publish, split_batch
+from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.segment_costs import _all_segments, _interpolate, _output_positions, interpolation_costs
 from keyin.lit.registry import load_trained_module
 
@@ -52,13 +51,10 @@ def profile(model: torch.nn.Module, clips: torch.Tensor) -> dict[str, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=32)
+    parser.set_defaults(split="test")  # a speed measurement, no choice made
     parser.add_argument("--ckpt", default="pretrained:brownian")
-    parser.add_argument("--clips", type=int, default=32)
-    parser.add_argument("--split", default="test")
-    parser.add_argument("--data-dir", default="data")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     module, config = load_trained_module(args.ckpt)
     _, batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)

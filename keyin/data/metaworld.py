@@ -12,7 +12,7 @@ clip is redrawn (``attempts``); shorter clips are padded by repeating the last f
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -40,19 +40,20 @@ class MetaWorldGenerator:
     speed_min: float = 0.4
     max_pause: int = 16           # env steps
     max_attempts: int = 20
-    timing: Timing = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not self.tasks:
             raise ValueError("tasks must name at least one Meta-World task, e.g. [pick-place-v3]")
         if self.frame_skip < 1 or self.n_future < 1 or self.tail_frames < 0:
             raise ValueError("frame_skip and n_future must be >= 1 and tail_frames >= 0")
-        object.__setattr__(self, "tasks", tuple(self.tasks))
+        for name in ("tasks", "hand_low", "hand_high"):  # lists from a config become hashable tuples
+            value = getattr(self, name)
+            object.__setattr__(self, name, None if value is None else tuple(value))
         check_tasks(self.tasks)
-        box = None if self.hand_low is None else tuple(self.hand_low), None if self.hand_high is None else tuple(self.hand_high)
-        object.__setattr__(self, "hand_low", box[0])
-        object.__setattr__(self, "hand_high", box[1])
-        object.__setattr__(self, "timing", Timing(box[0], box[1], self.speed_min, self.max_pause))
+
+    @property
+    def timing(self) -> Timing:
+        return Timing(self.hand_low, self.hand_high, self.speed_min, self.max_pause)
 
     @property
     def clip_length(self) -> int:
