@@ -7,6 +7,7 @@ frame tells which original frame it is, through the lossy codecs too (:func:`fra
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import h5py
@@ -58,3 +59,31 @@ def write_robomimic(path: Path, videos: list[np.ndarray], camera_key: str = "age
             demo["obs/robot0_eef_pos"] = np.zeros((len(video), 3), np.float32)
             demo["actions"] = np.zeros((len(video), 7), np.float32)
     return path
+
+
+LEROBOT_VIDEO_PATH = "videos/chunk-{episode_chunk:03d}/{video_key}/episode_{episode_index:06d}.mp4"
+
+
+def write_lerobot(root: Path, cameras: dict[str, list[np.ndarray]], version: str = "v2.1", chunks_size: int = 2) -> Path:
+    """A LeRobot v2 folder as its docs lay it out: meta/info.json (fps, chunks_size, the video_path
+    template, the features), meta/episodes.jsonl, one H.264 mp4 per episode and camera (episodes of
+    ``chunks_size`` per chunk folder, so a small set spans chunks); no parquet files, which keyin never reads."""
+    n_episodes = len(next(iter(cameras.values())))
+    features = {"action": {"dtype": "float32", "shape": [7], "names": None}}
+    for key, videos in cameras.items():
+        height, width = videos[0].shape[1:3]
+        features[key] = {"dtype": "video", "shape": [height, width, 3], "names": ["height", "width", "channel"]}
+        for index, video in enumerate(videos):
+            path = root / LEROBOT_VIDEO_PATH.format(episode_chunk=index // chunks_size, video_key=key, episode_index=index)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_video(path, video)
+    info = {"codebase_version": version, "fps": FPS, "chunks_size": chunks_size, "total_episodes": n_episodes,
+            "data_path": "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet",
+            "video_path": LEROBOT_VIDEO_PATH, "features": features}
+    (root / "meta").mkdir(parents=True, exist_ok=True)
+    (root / "meta" / "info.json").write_text(json.dumps(info, indent=4))
+    lengths = [len(video) for video in next(iter(cameras.values()))]
+    (root / "meta" / "episodes.jsonl").write_text("".join(
+        json.dumps({"episode_index": i, "tasks": ["push the block"], "length": n}) + "\n" for i, n in enumerate(lengths)
+    ))
+    return root

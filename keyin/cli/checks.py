@@ -27,6 +27,11 @@ def require_seed(value: Any, key: str = "seed") -> int:
     return value
 
 
+def optional_name(value: Any) -> str | None:
+    """A setting that is null or a name; a name typed as a number on the command line becomes its text."""
+    return None if value is None else str(value)
+
+
 def check_dataset(dataset: Mapping[str, Any]) -> None:
     """Sizes positive, image size a power of two, and S <= N <= M·S (REFERENCE §1, §3.8)."""
     for key in DATASET_SIZES:

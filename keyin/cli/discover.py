@@ -12,7 +12,7 @@ from typing import Any, Mapping
 from omegaconf import DictConfig
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
-from keyin.cli.checks import require_int_at_least, require_positive_int
+from keyin.cli.checks import optional_name, require_int_at_least, require_positive_int
 from keyin.data.frames import fit_note
 from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
 from keyin.data.labels import check_known, read_labels
@@ -102,7 +102,7 @@ def discover(cfg: DictConfig) -> dict:
     stride = window_stride(cfg, n_future)
     spec = ImportSpec(image_size=model["image_size"], channels=model["channels"], n_cond=n_cond, n_future=n_future,
                       frame_stride=cfg.frame_stride, window_stride=stride, binary=bool(cfg.binary), fps=cfg.fps,
-                      camera_key=str(cfg.camera_key))
+                      camera_key=optional_name(cfg.camera_key))
     videos = read_input(cfg, spec)
     discoverer = functools.partial(module.discover, discovery=model["rule"], keyframe_cost=model["keyframe_cost"])
     summary = discover_videos(

@@ -1,4 +1,4 @@
-"""keyin-import source=<videos>: your own videos (files, frame folders, arrays, robomimic HDF5) as a
+"""keyin-import source=<videos>: your own videos (files, frame folders, arrays, robomimic HDF5, LeRobot folders) as a
 keyin dataset in <data_dir>/<dataset name>/, for keyin-train and keyin-eval."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
-from keyin.cli.checks import check_common, require_int_at_least, require_positive_int
+from keyin.cli.checks import check_common, optional_name, require_int_at_least, require_positive_int
 from keyin.data.frames import CHANNELS
 from keyin.data.imports import ImportSpec, import_videos
 from keyin.errors import ConfigError
@@ -21,7 +21,7 @@ def check_import(cfg: DictConfig) -> dict[str, float]:
     if cfg.source is None:
         raise ConfigError(
             "source= is required: a video file, a folder of videos or of PNG/JPG frames, an .npy/.npz "
-            "array file or a robomimic-style .hdf5"
+            "array file, a robomimic-style .hdf5 or a LeRobot v2 dataset folder"
         )
     if cfg.dataset.channels not in CHANNELS:
         raise ConfigError(f"dataset.channels={cfg.dataset.channels} must be 1 (grey) or 3 (RGB) to import videos")
@@ -50,7 +50,7 @@ def import_command(cfg: DictConfig) -> dict:
     spec = ImportSpec(
         image_size=dataset.image_size, channels=dataset.channels, n_cond=dataset.n_cond, n_future=dataset.n_future,
         frame_stride=cfg.frame_stride, window_stride=cfg.window_stride, min_future=cfg.min_future,
-        binary=bool(cfg.binary), fps=cfg.fps, camera_key=str(cfg.camera_key),
+        binary=bool(cfg.binary), fps=cfg.fps, camera_key=optional_name(cfg.camera_key),
     )
     folder = Path(cfg.data_dir) / dataset.name
     stats = import_videos(

@@ -59,7 +59,7 @@ class ImportSpec:
     min_future: int = 1  # a window needs this many future frames (a shorter video is skipped)
     binary: bool = False  # integer frames stored as 0/1 are scaled to 0/255
     fps: float | None = None  # the frame rate of sources that store none (frames, arrays, robomimic)
-    camera_key: str = "agentview_image"  # robomimic: data/demo_*/obs/<camera_key>
+    camera_key: str | None = None  # robomimic (None: agentview_image) or LeRobot (None: its only camera)
 
     @property
     def clip_length(self) -> int:

@@ -6,13 +6,16 @@ A source is one of:
 * a folder of image frames (``.png .jpg .jpeg``): one video, its frames in name order;
 * an array file: ``.npy`` holding (T, H, W, C) or (n, T, H, W, C), ``.npz`` one or more such arrays;
 * a robomimic-style HDF5 file (``.hdf5 .h5``): one video per ``data/demo_<i>/obs/<camera key>``;
+* a LeRobot v2 dataset folder (``meta/info.json``, one mp4 per episode and camera under ``videos/``):
+  one video per episode of one camera;
 * a folder of any of these and of frame folders: each entry's videos (one level deep; hidden
   entries and files of other kinds are passed over).
 
 Names are in natural order (``frame2`` before ``frame10``, ``demo_2`` before ``demo_10``). Each video
 has an id that names it in label files and in the manifest: its file or folder name, then
 ``[key]`` for an ``.npz`` array or a robomimic demo and ``[i]`` for the i-th video of an
-(n, T, H, W, C) array, e.g. ``clips.npz[frames][3]``, ``demos.hdf5[demo_0]``.
+(n, T, H, W, C) array, e.g. ``clips.npz[frames][3]``, ``demos.hdf5[demo_0]``; a LeRobot episode is
+``<folder name>[episode_<index>]``.
 
 Frames are yielded as stored, (H, W, C) arrays of any dtype; :mod:`keyin.data.frames` checks their
 values and fits them to the model.
@@ -20,6 +23,7 @@ values and fits them to the model.
 
 from __future__ import annotations
 
+import json
 import re
 import zipfile
 from dataclasses import dataclass
@@ -37,6 +41,9 @@ VIDEO_SUFFIXES = (".mp4", ".avi", ".webm", ".gif", ".mov", ".mkv", ".m4v")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 ARRAY_SUFFIXES = (".npy", ".npz")
 HDF5_SUFFIXES = (".hdf5", ".h5")
+ROBOMIMIC_CAMERA = "agentview_image"  # the camera of a robomimic file when camera_key is null
+LEROBOT_INFO = Path("meta") / "info.json"
+LEROBOT_KEYS = ("fps", "chunks_size", "video_path", "features")  # what meta/info.json must hold for keyin
 GREY_MODES, COLOUR_MODES = ("1", "L", "LA"), ("RGB", "RGBA", "P", "PA", "CMYK", "YCbCr")
 
 
@@ -77,9 +84,10 @@ def image_files(folder: Path) -> list[Path]:
     return by_name(p for p in visible(folder) if p.is_file() and suffix(p) in IMAGE_SUFFIXES)
 
 
-def find_videos(source: Path, camera_key: str, key: str = "source") -> Iterator[Video]:
-    """Every video of ``source`` (see the module docstring), in natural name order; ``key`` is the
-    setting that named it, for the errors.
+def find_videos(source: Path, camera_key: str | None, key: str = "source") -> Iterator[Video]:
+    """Every video of ``source`` (see the module docstring), in natural name order; ``camera_key``
+    picks the camera of a robomimic file or LeRobot folder (None: ``agentview_image``, or a LeRobot
+    folder's only camera); ``key`` is the setting that named the source, for the errors.
 
     Raises:
         DatasetFormatError: the source does not exist, holds no video, or mixes frames and videos.
@@ -90,6 +98,9 @@ def find_videos(source: Path, camera_key: str, key: str = "source") -> Iterator[
                                  f"robomimic file, or a folder of videos or of image frames>")
     if source.is_file():
         yield from file_videos(source, camera_key)
+        return
+    if (source / LEROBOT_INFO).is_file():
+        yield from lerobot_videos(source, camera_key)
         return
     frames = image_files(source)
     entries = by_name(p for p in visible(source) if p.is_dir() and image_files(p) or is_media(p))
@@ -115,7 +126,7 @@ def is_media(path: Path) -> bool:
     return path.is_file() and suffix(path) in VIDEO_SUFFIXES + ARRAY_SUFFIXES + HDF5_SUFFIXES
 
 
-def file_videos(path: Path, camera_key: str) -> Iterator[Video]:
+def file_videos(path: Path, camera_key: str | None) -> Iterator[Video]:
     """The videos of one file, by its suffix."""
     kind = suffix(path)
     if kind in VIDEO_SUFFIXES:
@@ -218,8 +229,9 @@ def array_videos(path: Path) -> Iterator[Video]:
             )
 
 
-def robomimic_videos(path: Path, camera_key: str) -> Iterator[Video]:
+def robomimic_videos(path: Path, camera_key: str | None) -> Iterator[Video]:
     """One video per ``data/demo_<i>/obs/<camera_key>`` of a robomimic-style HDF5 file."""
+    camera_key = camera_key or ROBOMIMIC_CAMERA
     try:
         handle = h5py.File(path, "r")
     except OSError as err:
@@ -241,3 +253,80 @@ def robomimic_videos(path: Path, camera_key: str) -> Iterator[Video]:
                     f"import ({', '.join(cameras) or 'this demo has no (T, H, W, C) observation'})"
                 )
             yield Video(f"{path.name}[{demo}]", path, obs[camera_key][()])
+
+
+def lerobot_videos(root: Path, camera_key: str | None) -> Iterator[Video]:
+    """One video per episode of a LeRobot v2 folder, the mp4 that ``meta/info.json``'s ``video_path``
+    template names for the episode and camera; episodes from ``meta/episodes.jsonl`` (or
+    ``total_episodes``), the frame rate from ``fps``."""
+    info = lerobot_info(root)
+    camera = lerobot_camera(root, info, camera_key)
+    episodes = lerobot_episodes(root, info)
+    if not episodes:
+        raise DatasetFormatError(f"{root} lists no episodes (meta/episodes.jsonl, total_episodes); pass another source=")
+    for index in episodes:
+        try:
+            relative = info["video_path"].format(
+                episode_chunk=index // int(info["chunks_size"]), video_key=camera, episode_index=index
+            )
+        except (KeyError, IndexError, ValueError) as err:
+            raise DatasetFormatError(
+                f"{root / LEROBOT_INFO}: video_path {info['video_path']!r} is not a LeRobot v2 template ({err!r}); "
+                f"it names {{episode_chunk}}, {{video_key}} and {{episode_index}}"
+            ) from None
+        path = root / relative
+        if not path.is_file():
+            raise DatasetFormatError(
+                f"{root}: episode {index}'s video for camera {camera!r} should be {path}, which does not exist; "
+                f"download the dataset's videos/ too, or drop the episode from meta/episodes.jsonl"
+            )
+        yield Video(f"{root.name}[episode_{index}]", path, video_file(path).frames, float(info["fps"]))
+
+
+def lerobot_info(root: Path) -> dict:
+    """``meta/info.json`` of a LeRobot folder, checked to be the v2 layout (one mp4 per episode)."""
+    path = root / LEROBOT_INFO
+    try:
+        info = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise DatasetFormatError(f"{path} is not readable JSON ({err}); it is truncated or corrupt") from None
+    version = str(info.get("codebase_version", "")) if isinstance(info, dict) else ""
+    if not version.startswith("v2"):
+        raise DatasetFormatError(
+            f"{path} says codebase_version {version or 'nothing'}; keyin-import reads LeRobot's v2.0/v2.1 layout "
+            f"(one mp4 per episode and camera; v3.0 packs many episodes into one file): download the dataset's "
+            f"v2.1 revision, or export the episodes as mp4 files and pass their folder"
+        )
+    missing = [key for key in LEROBOT_KEYS if key not in info]
+    if missing:
+        raise DatasetFormatError(f"{path} has no {', '.join(missing)}; a LeRobot v2 info.json holds {', '.join(LEROBOT_KEYS)}")
+    return info
+
+
+def lerobot_camera(root: Path, info: dict, camera_key: str | None) -> str:
+    """The camera to import: ``camera_key``, or the folder's only video feature when it is None."""
+    cameras = sorted(key for key, feature in info["features"].items()
+                     if isinstance(feature, dict) and feature.get("dtype") == "video")
+    if not cameras:
+        raise DatasetFormatError(
+            f"{root / LEROBOT_INFO} lists no video features (dtype 'video'); keyin imports a LeRobot dataset's "
+            f"camera videos, not frames stored in its parquet files"
+        )
+    if camera_key in cameras or (camera_key is None and len(cameras) == 1):
+        return camera_key or cameras[0]
+    asked = f"has no camera {camera_key!r}" if camera_key else f"has {len(cameras)} cameras"
+    choices = ", ".join(f"camera_key={camera}" for camera in cameras)
+    raise DatasetFormatError(f"{root} {asked}; pick one: {choices}")
+
+
+def lerobot_episodes(root: Path, info: dict) -> list[int]:
+    """The episode indices of ``meta/episodes.jsonl``, or 0 … total_episodes − 1 where it is missing."""
+    path = root / "meta" / "episodes.jsonl"
+    if not path.is_file():
+        return list(range(int(info.get("total_episodes", 0))))
+    try:
+        return sorted(int(json.loads(line)["episode_index"]) for line in path.read_text().splitlines() if line.strip())
+    except (ValueError, KeyError, TypeError) as err:
+        raise DatasetFormatError(
+            f"{path}: a line is not a JSON object with an integer episode_index ({err!r}); fix or remove the line"
+        ) from None

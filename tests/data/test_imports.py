@@ -12,7 +12,9 @@ from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import inspect_shard, read_manifest, split_files
 from keyin.data.imports import ImportSpec, clip_origins, import_videos
 from keyin.errors import DatasetFormatError
-from tests.videos import EVENTS, FPS, frame_numbers, frames, write_png_folder, write_robomimic, write_video
+from tests.videos import (
+    EVENTS, FPS, frame_numbers, frames, write_lerobot, write_png_folder, write_robomimic, write_video,
+)
 
 N_COND, N_FUTURE = 2, 10
 SPEC = ImportSpec(image_size=16, channels=1, n_cond=N_COND, n_future=N_FUTURE)
@@ -102,6 +104,30 @@ def test_a_robomimic_file_imports_each_demo_from_its_camera(tmp_path):
     assert "2 video(s) have no labels" in stats["warnings"][0]
 
 
+def test_a_lerobot_folder_imports_each_episode_from_the_camera_asked_for(tmp_path):
+    lengths = [20, 26, 14]
+    top = [frames(n) for n in lengths]
+    wrist = [frames(n)[::-1].copy() for n in lengths]  # the wrist camera plays each episode backwards
+    root = write_lerobot(tmp_path / "pusht", {"observation.images.top": top, "observation.images.wrist": wrist})
+    labels = labels_file(tmp_path, {"pusht[episode_2]": [5]})
+    folder, stats = import_to(tmp_path, root, camera_key="observation.images.wrist", labels=labels)
+    sources = read_manifest(folder)["sources"]
+    assert [s["id"] for s in sources] == [f"pusht[episode_{i}]" for i in range(3)]  # episode 2 is in chunk-001
+    assert all(s["fps"] == FPS for s in sources)
+    read, origins = clips(folder), clip_origins(folder, "train")
+    assert len(read) == 2 + 3 + 2 and stats["videos"] == 3
+    assert frame_numbers(read[0]["frames"]) == list(range(19, 7, -1))  # the wrist video, frame by frame
+    keyed = [(o.video, o.frame(N_COND + int(p))) for i, o in enumerate(origins) for p in read[i]["keyframes"].nonzero()]
+    assert keyed == [("pusht[episode_2]", 5)]
+
+
+def test_a_one_camera_lerobot_folder_needs_no_camera_key(tmp_path):
+    root = write_lerobot(tmp_path / "solo", {"observation.image": [frames(20), frames(30)]}, version="v2.0")
+    folder, stats = import_to(tmp_path, root)
+    assert [s["id"] for s in read_manifest(folder)["sources"]] == ["solo[episode_0]", "solo[episode_1]"]
+    assert frame_numbers(clips(folder)[0]["frames"]) == list(range(12))
+
+
 def test_a_folder_of_videos_imports_each_and_skips_a_too_short_one_with_a_warning(tmp_path):
     source = tmp_path / "videos"
     source.mkdir()
@@ -147,6 +173,11 @@ def bad(tmp_path_factory):
     np.save(root / "flat.npy", frames(20)[..., 0])
     np.save(root / "blank.npy", np.zeros((2, 20, 16, 16, 1), np.uint8))  # two videos, all 0
     write_robomimic(root / "demos.hdf5", [frames(20)])
+    two_cameras = {"observation.images.top": [frames(20)], "observation.images.wrist": [frames(20)]}
+    write_lerobot(root / "lerobot", two_cameras)
+    write_lerobot(root / "lerobot_v3", {"observation.image": [frames(20)]}, version="v3.0")
+    write_lerobot(root / "lerobot_gap", {"observation.image": [frames(20), frames(20)]})
+    (root / "lerobot_gap/videos/chunk-000/observation.image/episode_000001.mp4").unlink()
     labels_file(root, {"good.mp4": [12, 40]}).rename(root / "past.json")
     labels_file(root, {"bad.mp4": [1]}).rename(root / "unknown.json")
     return root
@@ -168,6 +199,13 @@ BAD_INPUTS = [
     ("no-channel-axis", "flat.npy", {}, "frames are (T, H, W, C) or (n, T, H, W, C) (grey frames need their channel"),
     ("camera-key", "demos.hdf5", {"camera_key": "wrist"},
      "data/demo_0/obs has no 'wrist'; set camera_key= to the camera to import (agentview_image)"),
+    ("lerobot-which-camera", "lerobot", {},
+     "{bad}/lerobot has 2 cameras; pick one: camera_key=observation.images.top, camera_key=observation.images.wrist"),
+    ("lerobot-camera-key", "lerobot", {"camera_key": "front"}, "{bad}/lerobot has no camera 'front'; pick one"),
+    ("lerobot-v3", "lerobot_v3", {}, "{bad}/lerobot_v3/meta/info.json says codebase_version v3.0; keyin-import reads "
+     "LeRobot's v2.0/v2.1 layout"),
+    ("lerobot-missing-video", "lerobot_gap", {}, "{bad}/lerobot_gap: episode 1's video for camera 'observation.image' "
+     "should be {bad}/lerobot_gap/videos/chunk-000/observation.image/episode_000001.mp4, which does not exist"),
     ("label-past-end", "good.mp4", {"labels": "past.json"},
      "{bad}/past.json: video 'good.mp4' has keyframe 40, past its end: {bad}/good.mp4 has 40 frames (0-39); fix the label"),
     ("label-unknown-video", "good.mp4", {"labels": "unknown.json"},
