@@ -7,8 +7,8 @@ Scores the first ``--clips`` clips of a split (default: ``data/brownian``'s test
 dataset=brownian 'splits={test: 1000}'`` writes it) with :mod:`keyin.decode.segmentation`, each clip
 within its own valid frames, and compares the summed interpolation cost (pixel BCE, or squared error
 of the embeddings) of three hard segmentations: the DP optimum, the ground truth, and Constant every
-``c`` frames (on full-length clips). The DP's keyframes are scored by the information rule's two
-columns (a padded clip's sequence end removed from both sides, or given to both). Stage 2 can only
+``c`` frames (over the clips where none of the three has a gap longer than S; before 2026-12-05 over
+the full-length clips only). The DP's keyframes are scored by the information rule's two columns (a padded clip's sequence end removed from both sides, or given to both). Stage 2 can only
 discover what the DP finds. The same is then done with the length prior removed: each offset's mean
 cost over the scored clips subtracted from its segments (label-free), so that a spacing is not
 preferred for its segment lengths alone (interpolation costs grow faster than linearly with the
@@ -101,20 +101,26 @@ def offset_means(by_length: dict[int, torch.Tensor]) -> torch.Tensor:
 def report(args: argparse.Namespace, name: str, by_length: dict[int, torch.Tensor], dp_positions: list[list[int]],
            truth: list[list[int]], lengths: torch.Tensor, n_future: int) -> None:
     """Print the summed ``name`` of the DP optimum, the labels and Constant every ``args.constant``
-    frames (full-length clips), and the DP's keyframe scores by the information rule's two columns."""
-    full = (lengths == n_future).nonzero().flatten()  # the rows the DP scored at length N, in its order
-    costs = by_length.get(n_future, torch.zeros(0, n_future, 1))  # the sums below: full-length clips only
-    constant = [list(range(args.constant - 1, n_future - 1, args.constant))] * len(full)
-    print(f"\n| segmentation | mean summed {name} ({args.space}) |")
+    frames, each clip within its own valid frames, over the clips where all three fit (no gap over S),
+    and the DP's keyframe scores by the information rule's two columns."""
+    totals: dict[str, list[torch.Tensor]] = {"DP optimum": [], "ground truth": [], f"constant {args.constant}": []}
+    for length, costs in sorted(by_length.items()):
+        rows = (lengths == length).nonzero().flatten().tolist()  # the DP's rows of this length, in its order
+        constant = list(range(args.constant - 1, length - 1, args.constant))
+        for label, positions in zip(totals, ([dp_positions[i] for i in rows], [truth[i] for i in rows],
+                                             [constant] * len(rows))):
+            totals[label].append(path_cost(costs, positions))
+    summed = {label: torch.cat(parts) for label, parts in totals.items()}  # (B,) per clip, by length
+    fits = torch.stack(list(summed.values())).isfinite().all(0)
+    truth_total, constant_total = summed["ground truth"][fits], summed[f"constant {args.constant}"][fits]
+    print(f"\n| segmentation | mean summed {name} ({args.space}), {int(fits.sum())} clips |")
     print("|---|---|")
-    for label, positions in [("DP optimum", [dp_positions[i] for i in full.tolist()]),
-                             ("ground truth", [truth[i] for i in full.tolist()]),
-                             (f"constant {args.constant}", constant)]:
-        totals = path_cost(costs, positions)
-        finite = totals[torch.isfinite(totals)]
-        print(f"| {label} | {finite.mean():.1f} ({len(finite)} clips) |")
+    for label, values in summed.items():
+        print(f"| {label} | {values[fits].mean():.1f} |")
+    print(f"\nThe labels cost less than Constant every {args.constant} frames on "
+          f"{(truth_total < constant_total).float().mean():.1%} of these clips.")
     scores = column_scores(dp_positions, truth, lengths.tolist(), n_future)
-    print(f"\nDP keyframes vs ground truth ({len(lengths)} clips, {len(full)} of full length; interior / with ends):")
+    print(f"\nDP keyframes vs ground truth ({len(lengths)} clips; interior / with ends):")
     for column in ("interior", "with_ends"):
         print(f"- {column}: F1 {scores['f1_' + column]:.3f}, ±1 {scores['f1_tol1_' + column]:.3f}, "
               f"precision {scores['precision_' + column]:.3f}, recall {scores['recall_' + column]:.3f}, "
