@@ -1,7 +1,9 @@
 """Meta-World's experts as a dataset: the phase labels read from each expert's if/elif chain, the
 switch rule, the weld and observation fixes, and the clips (known answers, determinism, shapes)."""
 
+import runpy
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,6 +11,7 @@ from hydra import compose, initialize_config_module
 from hydra.utils import instantiate
 
 from keyin.data.metaworld import MetaWorldGenerator
+from keyin.data.sources import decoded_frames
 from keyin.envs.metaworld import PhaseTracer, Timing, branch_lines, debounced_switches, expert, import_metaworld, make_env, run_episode
 
 
@@ -137,3 +140,14 @@ def test_a_missing_metaworld_install_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "metaworld", None)  # as if not installed
     with pytest.raises(ImportError, match=r"pip install 'metaworld==3.0.0' packaging \(or pip install 'keyin\[sim\]'\)"):
         import_metaworld()
+
+
+def test_the_committed_example_episodes_are_what_their_script_writes(tmp_path):
+    """docs/examples/metaworld: the same labels and frame counts, and frames within codec noise."""
+    committed = Path(__file__).parents[2] / "docs" / "examples" / "metaworld"
+    runpy.run_path(str(committed.parent / "metaworld_episodes.py"))["main"](tmp_path)
+    assert (tmp_path / "labels.csv").read_text() == (committed / "labels.csv").read_text()
+    for video in sorted(committed.glob("*.mp4")):
+        ours, theirs = (np.stack(list(decoded_frames(folder / video.name))) for folder in (committed, tmp_path))
+        assert ours.shape == theirs.shape
+        assert np.abs(ours.astype(int) - theirs).mean() < 2.0
