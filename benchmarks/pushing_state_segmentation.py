@@ -51,8 +51,12 @@ def linear_segment_costs(states: torch.Tensor, max_offset: int) -> torch.Tensor:
     return costs
 
 
-def discover(arrays: dict[str, np.ndarray], objects: tuple[str, ...], price: float | str, max_offset: int) -> list[list[int]]:
-    """Per clip, the interior keyframe positions of the best segmentation of the true state."""
+def discover(
+    arrays: dict[str, np.ndarray], objects: tuple[str, ...], price: float | str, max_offset: int,
+    n_keyframes: int = N_KEYFRAMES,
+) -> list[list[int]]:
+    """Per clip, the interior keyframe positions of the best segmentation of the true state (at most
+    ``n_keyframes`` keyframes, segments of at most ``max_offset`` frames)."""
     states = torch.from_numpy(np.concatenate([arrays[name] for name in objects], axis=-1)).double()
     states = states[:, N_COND - 1 :]  # (B, N + 1, D) extended index
     lengths = torch.from_numpy(arrays["length"].astype(np.int64)) - N_COND
@@ -60,7 +64,7 @@ def discover(arrays: dict[str, np.ndarray], objects: tuple[str, ...], price: flo
     def segment_costs(rows: torch.Tensor, length: int) -> torch.Tensor:
         return linear_segment_costs(states[rows, : length + 1], max_offset)
 
-    return decode_by_length(segment_costs, lengths, N_KEYFRAMES, max_offset, price)
+    return decode_by_length(segment_costs, lengths, n_keyframes, max_offset, price)
 
 
 def snap_to_rest_start(positions: list[list[int]], puck: np.ndarray, rest_step: float) -> list[list[int]]:
