@@ -11,6 +11,7 @@ clip is redrawn (``attempts``); shorter clips are padded by repeating the last f
 
 from __future__ import annotations
 
+import copy
 import os
 from dataclasses import dataclass
 from typing import Any
@@ -77,8 +78,9 @@ class MetaWorldGenerator:
             _WORLDS[key] = env, PhaseTracer(expert(task)), mujoco.Renderer(env.model, self.image_size, self.image_size)
         return _WORLDS[key]
 
-    def render(self, renderer: Any, env: Any) -> np.ndarray:
-        renderer.update_scene(env.data, camera=self.camera)
+    def render(self, renderer: Any, data: Any) -> np.ndarray:
+        """(H, W, 3) uint8 of the scene in ``data`` (an env's ``MjData`` or a copy of it)."""
+        renderer.update_scene(data, camera=self.camera)
         image = renderer.render()
         return np.ascontiguousarray(image[::-1, ::-1] if self.camera in CAMERAS_UPSIDE_DOWN else image)
 
@@ -102,9 +104,9 @@ class MetaWorldGenerator:
         env, tracer, renderer = self.world(self.tasks[task_index])
         for attempt in range(self.max_attempts):
             rng = np.random.default_rng(np.random.SeedSequence(seed + index, spawn_key=(attempt,)))
-            episode = run_episode(
+            episode = run_episode(  # the saved frames' physics copied; rendered only if the episode is kept
                 env, tracer, self.timing, rng, self.max_steps, self.tail_frames * self.frame_skip,
-                lambda e: self.render(renderer, e), self.frame_skip,
+                lambda e: copy.copy(e.data), self.frame_skip,
             )
             if episode.success_step is not None and episode.success_step <= self.max_steps - self.tail_frames * self.frame_skip:
                 break
@@ -113,7 +115,8 @@ class MetaWorldGenerator:
                 f"clip {index} ({self.tasks[task_index]}): no expert episode succeeded within {self.max_steps} env steps in {self.max_attempts} "
                 f"draws; raise n_future or frame_skip, or drop the task"
             )
-        valid = len(episode.frames)
+        frames = [self.render(renderer, data) for data in episode.captures]
+        valid = len(frames)
         switch_steps = debounced_switches(episode.phases, self.hold_steps) + [episode.success_step]
         keyframes = np.zeros(length, dtype=bool)
         keyframes[np.minimum(np.rint(np.array(switch_steps) / self.frame_skip).astype(int), valid - 1)] = True
@@ -125,7 +128,7 @@ class MetaWorldGenerator:
             return np.concatenate([values, np.repeat(values[-1:], pad, axis=0)])
 
         arrays = {
-            "frames": padded(np.stack(episode.frames)),
+            "frames": padded(np.stack(frames)),
             "length": np.int32(valid),
             "keyframes": keyframes,
             "phases": padded(phases).astype(np.int8),

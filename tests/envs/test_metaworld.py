@@ -1,6 +1,7 @@
 """Meta-World's experts as a dataset: the phase labels read from each expert's if/elif chain, the
 switch rule, the weld and observation fixes, and the clips (known answers, determinism, shapes)."""
 
+import copy
 import runpy
 import sys
 from pathlib import Path
@@ -107,6 +108,22 @@ def test_clip_layout_labels_and_padding(push_clip):
     assert (arrays["frames"][valid:] == arrays["frames"][valid - 1]).all()  # padding repeats the last frame
     assert arrays["frames"][0].std() > 10  # a rendered scene, not a blank
     assert (np.diff(arrays["phases"][:valid].astype(int)) != 0).sum() >= 1
+
+
+def test_a_copy_of_the_physics_renders_as_the_env_did_when_it_was_taken(push_clip):
+    """The generator renders a kept episode's saved frames afterwards, from copies of env.data."""
+    generator = push_clip[0]
+    env, tracer, renderer = generator.world("push-v3")
+    obs, _ = env.reset()
+    snapshots, direct = [], []
+    for _ in range(3):
+        for _ in range(generator.frame_skip):
+            obs = env.step(tracer(obs)[0].astype(np.float32))[0]
+        snapshots.append(copy.copy(env.data))
+        direct.append(generator.render(renderer, env.data))
+    later = [generator.render(renderer, data) for data in snapshots]
+    assert all(np.array_equal(a, b) for a, b in zip(direct, later))
+    assert not np.array_equal(later[0], later[-1])  # the copies are not one shared state
 
 
 def test_clips_are_deterministic_in_seed_plus_index(push_clip):
