@@ -29,12 +29,15 @@ class RandomKeyframes:
 
 
 class ConstantKeyframes:
-    """A keyframe every ``offset`` frames: future indices offset-1, 2·offset-1, ... < length."""
+    """A keyframe every ``offset`` frames: future indices offset-1, 2·offset-1, ... < length; with
+    ``n_keyframes`` only the first that many (Jumpy's pattern, which stops after M keyframes)."""
 
-    def __init__(self, offset: int) -> None:
+    def __init__(self, offset: int, n_keyframes: int | None = None) -> None:
         if offset < 1:
             raise ValueError(f"offset must be >= 1, got {offset}")
-        self.offset = offset
+        if n_keyframes is not None and n_keyframes < 1:
+            raise ValueError(f"n_keyframes must be >= 1 or None, got {n_keyframes}")
+        self.offset, self.n_keyframes = offset, n_keyframes
 
     def __call__(self, frames: torch.Tensor, future_length: torch.Tensor) -> list[list[int]]:
-        return [list(range(self.offset - 1, length, self.offset)) for length in future_length.tolist()]
+        return [list(range(self.offset - 1, length, self.offset))[: self.n_keyframes] for length in future_length.tolist()]

@@ -15,3 +15,4 @@ def test_random_picks_distinct_frames_inside_each_clip_reproducibly():
 
 def test_constant_marks_every_offset_frames():
     assert ConstantKeyframes(6)(None, torch.tensor([30, 13])) == [[5, 11, 17, 23, 29], [5, 11]]
+    assert ConstantKeyframes(4, n_keyframes=3)(None, torch.tensor([30, 9])) == [[3, 7, 11], [3, 7]]  # Jumpy's pattern
