@@ -3,9 +3,10 @@
     MUJOCO_GL=egl OMP_NUM_THREADS=1 python benchmarks/metaworld_generation_speed.py --clips 100
 
 Runs the dataset's generator (conf/dataset/metaworld.yaml) in this process on clips 0 … n − 1 of the
-validation seeds, after one warm-up clip per task (building each task's env, expert and renderer,
-timed apart). Counts every rendered frame, those of rejected episodes included, and the time spent
-in rendering; issue 46's target is 40 rendered frames/s per core.
+validation seeds, after building each task's env, expert and renderer (timed apart). Counts the
+rendered frames and the time spent rendering; since 2026-12-05 only kept episodes are rendered (from
+copies of their physics), so rendered and kept frames are the same. Issue 46's target is 40 rendered
+frames/s per core.
 """
 
 from __future__ import annotations
@@ -32,9 +33,9 @@ def main() -> None:
     renders = {"frames": 0, "seconds": 0.0}
     render = MetaWorldGenerator.render
 
-    def counted(self: MetaWorldGenerator, renderer, env):
+    def counted(self: MetaWorldGenerator, renderer, data):
         began = time.perf_counter()
-        image = render(self, renderer, env)
+        image = render(self, renderer, data)
         renders["frames"] += 1
         renders["seconds"] += time.perf_counter() - began
         return image

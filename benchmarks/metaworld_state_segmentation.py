@@ -19,10 +19,11 @@ from pathlib import Path
 import numpy as np
 import ruptures
 
-from pushing_state_segmentation import PRICES, discover, score
+from pushing_state_segmentation import N_COND, PRICES, discover, score
 from keyin.data.hdf5 import load_arrays
 
 N_KEYFRAMES, MAX_OFFSET = 4, 12
+assert N_COND == 1, "discover and score read the clips with pushing's n_cond, which is Meta-World's too"
 PENALTIES = [1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2]  # squared metres per change, for PELT on the hand velocity
 
 

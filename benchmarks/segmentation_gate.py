@@ -112,13 +112,16 @@ def report(args: argparse.Namespace, name: str, by_length: dict[int, torch.Tenso
             totals[label].append(path_cost(costs, positions))
     summed = {label: torch.cat(parts) for label, parts in totals.items()}  # (B,) per clip, by length
     fits = torch.stack(list(summed.values())).isfinite().all(0)
-    truth_total, constant_total = summed["ground truth"][fits], summed[f"constant {args.constant}"][fits]
-    print(f"\n| segmentation | mean summed {name} ({args.space}), {int(fits.sum())} clips |")
-    print("|---|---|")
-    for label, values in summed.items():
-        print(f"| {label} | {values[fits].mean():.1f} |")
-    print(f"\nThe labels cost less than Constant every {args.constant} frames on "
-          f"{(truth_total < constant_total).float().mean():.1%} of these clips.")
+    if fits.any():
+        truth_total, constant_total = summed["ground truth"][fits], summed[f"constant {args.constant}"][fits]
+        print(f"\n| segmentation | mean summed {name} ({args.space}), {int(fits.sum())} clips |")
+        print("|---|---|")
+        for label, values in summed.items():
+            print(f"| {label} | {values[fits].mean():.1f} |")
+        print(f"\nThe labels cost less than Constant every {args.constant} frames on "
+              f"{(truth_total < constant_total).float().mean():.1%} of these clips.")
+    else:
+        print(f"\nNo clip fits all three segmentations (each has a gap over S somewhere): no summed {name} to compare.")
     scores = column_scores(dp_positions, truth, lengths.tolist(), n_future)
     print(f"\nDP keyframes vs ground truth ({len(lengths)} clips; interior / with ends):")
     for column in ("interior", "with_ends"):

@@ -114,3 +114,42 @@ def test_export_slims_run_checkpoints_into_a_folder_named_and_described_by_their
     monkeypatch.setattr("sys.argv", ["keyin.cli.pretrained", "export", str(path), str(path), "--name", "x"])
     with pytest.raises(SystemExit, match="--name and --command name one checkpoint"):
         main()
+
+
+def val_metrics(tmp_path, ckpt="pretrained:smoke", split="val", own=0.50, map_f1=0.505, boundaries=0.40):
+    """A keyin-eval metrics.json of the smoke model (its own rule `offsets`, named keyin_plus) on 4 clips."""
+    metrics = {"ckpt": ckpt, "split": split, "method": "keyin_plus", "f1_interior": own, "n_sequences": 4,
+               "variants": {"keyin_plus_map": {"f1_interior": map_f1}, "keyin_plus_boundaries": {"f1_interior": boundaries}}}
+    path = tmp_path / f"metrics_{split}.json"
+    path.write_text(json.dumps(metrics))
+    return path
+
+
+def test_rules_records_the_cheapest_rule_within_0_01_of_map_and_keyin_discover_uses_it(shipped, tmp_path, monkeypatch, capsys):
+    from omegaconf import OmegaConf
+
+    from keyin.cli.discover import chosen_rule
+    from keyin.cli.pretrained import main
+
+    monkeypatch.setattr(pretrained.recorded_rule, "__defaults__", (tmp_path,))
+    monkeypatch.setattr("sys.argv", ["keyin.cli.pretrained", "rules", "smoke", str(val_metrics(tmp_path)), "--folder", str(tmp_path)])
+    main()
+    recorded = pretrained.registry(tmp_path)["smoke"]["default_rule"]
+    assert recorded == {"rule": "offsets", "val_f1_interior": {"boundaries": 0.4, "map": 0.505, "offsets": 0.5},
+                        "val_clips": 4, "tolerance": 0.01}
+    assert "default rule is offsets" in capsys.readouterr().out
+    module, _ = load_trained_module("pretrained:smoke")
+    auto = OmegaConf.create({"rule": "auto", "ckpt": "pretrained:smoke"})
+    assert chosen_rule(auto, module) == "offsets"
+    assert "recorded default" in capsys.readouterr().err
+    assert chosen_rule(OmegaConf.create({"rule": "auto", "ckpt": str(shipped[0])}), module) == "map"  # not shipped: map
+    assert chosen_rule(OmegaConf.create({"rule": "boundaries", "ckpt": "pretrained:smoke"}), module) == "boundaries"
+
+
+def test_rules_refuses_scores_of_the_test_split(shipped, tmp_path, monkeypatch):
+    from keyin.cli.pretrained import main
+
+    monkeypatch.setattr("sys.argv", ["keyin.cli.pretrained", "rules", "smoke", str(val_metrics(tmp_path, split="test")),
+                                     "--folder", str(tmp_path)])
+    with pytest.raises(SystemExit, match="scored ckpt=pretrained:smoke on split=test; record the rule from"):
+        main()

@@ -64,10 +64,13 @@ def write_robomimic(path: Path, videos: list[np.ndarray], camera_key: str = "age
 LEROBOT_VIDEO_PATH = "videos/chunk-{episode_chunk:03d}/{video_key}/episode_{episode_index:06d}.mp4"
 
 
-def write_lerobot(root: Path, cameras: dict[str, list[np.ndarray]], version: str = "v2.1", chunks_size: int = 2) -> Path:
+def write_lerobot(
+    root: Path, cameras: dict[str, list[np.ndarray]], version: str = "v2.1", chunks_size: int = 2, fps: float = FPS
+) -> Path:
     """A LeRobot v2 folder as its docs lay it out: meta/info.json (fps, chunks_size, the video_path
     template, the features), meta/episodes.jsonl, one H.264 mp4 per episode and camera (episodes of
-    ``chunks_size`` per chunk folder, so a small set spans chunks); no parquet files, which keyin never reads."""
+    ``chunks_size`` per chunk folder, so a small set spans chunks; the mp4s at FPS, info.json at ``fps``);
+    no parquet files, which keyin never reads."""
     n_episodes = len(next(iter(cameras.values())))
     features = {"action": {"dtype": "float32", "shape": [7], "names": None}}
     for key, videos in cameras.items():
@@ -77,7 +80,7 @@ def write_lerobot(root: Path, cameras: dict[str, list[np.ndarray]], version: str
             path = root / LEROBOT_VIDEO_PATH.format(episode_chunk=index // chunks_size, video_key=key, episode_index=index)
             path.parent.mkdir(parents=True, exist_ok=True)
             write_video(path, video)
-    info = {"codebase_version": version, "fps": FPS, "chunks_size": chunks_size, "total_episodes": n_episodes,
+    info = {"codebase_version": version, "fps": fps, "chunks_size": chunks_size, "total_episodes": n_episodes,
             "data_path": "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet",
             "video_path": LEROBOT_VIDEO_PATH, "features": features}
     (root / "meta").mkdir(parents=True, exist_ok=True)

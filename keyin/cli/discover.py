@@ -21,17 +21,22 @@ from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
 from keyin.lit.run import compile_frame_networks
+from keyin.pretrained import recorded_rule
 from keyin.pipelines.discover import discover_videos
+
+
+AUTO = "auto"  # rule=auto: a shipped model's recorded default rule, else map
 
 
 def check_discover(cfg: DictConfig) -> None:
     """The settings keyin-discover reads before it loads anything."""
     for key, what in (("ckpt", "<run dir>/checkpoints/keyframes/last.ckpt of a keyin-train run"),
-                      ("input", "a video file, a folder of videos or of PNG/JPG frames, an .npy/.npz or a robomimic .hdf5")):
+                      ("input", "a video file, a folder of videos or of PNG/JPG frames, an .npy/.npz, a robomimic "
+                                ".hdf5 or a LeRobot v2 folder")):
         if cfg[key] is None:
             raise ConfigError(f"{key}= is required: {what}")
-    if cfg.rule is not None and cfg.rule not in KEYIN_RULES:
-        raise ConfigError(f"rule={cfg.rule} is not a rule of KEYIN; choose one of {', '.join(KEYIN_RULES)} or null")
+    if cfg.rule not in (None, AUTO, *KEYIN_RULES):
+        raise ConfigError(f"rule={cfg.rule} is not a rule of KEYIN; choose one of {', '.join(KEYIN_RULES)}, {AUTO} or null")
     cost = cfg.keyframe_cost
     nats = isinstance(cost, (int, float)) and not isinstance(cost, bool) and cost >= 0
     if cost is not None and cost != KNEE and not nats:
@@ -78,10 +83,26 @@ def read_input(cfg: DictConfig, spec: ImportSpec) -> list[ImportedVideo]:
     return videos
 
 
+def chosen_rule(cfg: DictConfig, module: Any) -> str:
+    """``rule=``, where ``auto`` is a shipped model's recorded default (the cheapest rule within 0.01
+    of ``map`` on its validation clips, said on stderr) and otherwise ``map``; null: the model's own."""
+    if cfg.rule != AUTO:
+        return cfg.rule or module.hparams.discovery
+    recorded = recorded_rule(cfg.ckpt)
+    if recorded is None:
+        return "map"
+    if recorded["rule"] != "map":
+        scores = ", ".join(f"{rule} {f1:.3f}" for rule, f1 in recorded["val_f1_interior"].items())
+        print(f"note: rule={recorded['rule']}, {cfg.ckpt}'s recorded default: the cheapest rule within "
+              f"{recorded['tolerance']} of map's interior F1 on {recorded['val_clips']} validation clips ({scores}); "
+              f"rule=map for the exact segmentation", file=sys.stderr)
+    return recorded["rule"]
+
+
 def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> dict[str, Any]:
     """What keyframes.json says about the model and its rule."""
     sizes = module.hparams.stage1
-    rule = cfg.rule or module.hparams.discovery
+    rule = chosen_rule(cfg, module)
     if rule == "boundaries" and not module.hparams.offset_evidence:
         raise ConfigError(f"rule=boundaries needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
                           f"has not; pass rule=map or rule=offsets")

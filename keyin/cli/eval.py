@@ -131,7 +131,8 @@ def evaluate(cfg: DictConfig) -> dict:
         metrics["video"] = evaluate_video(module.model, clips, cfg.video_samples, **loader)
         save_rollouts(module.model, clips, cfg.video_samples, run_dir(), cfg.video_clips)
         metrics["video_pictured"] = save_prior_samples(module.model, clips, cfg.video_samples, run_dir(), cfg.video_clips)
-    metrics.update(dataset=dataset.name, seed=cfg.seed)
+    scored = {"data": str(cfg.data)} if cfg.data is not None else {"split": cfg.split}  # what was scored, and by what
+    metrics.update(dataset=dataset.name, seed=cfg.seed, **scored, ckpt=None if cfg.ckpt is None else str(cfg.ckpt))
     write_metrics(metrics, run_dir())
     return metrics
 

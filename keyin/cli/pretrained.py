@@ -5,6 +5,8 @@
         # slim copies outside the package (a table's models), each named after its run dir, its
         # command read from the run's .hydra/hydra.yaml
     python -m keyin.cli.pretrained example     # the example video `make demo` discovers the keyframes of
+    python -m keyin.cli.pretrained rules <name> <keyin-eval ckpt=pretrained:<name> split=val>/metrics.json
+        # record keyin-discover's default rule for it: the cheapest within 0.01 of map on validation clips
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from keyin.data.brownian import BrownianGenerator
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.lit.checkpoints import load_checkpoint
-from keyin.pretrained import FOLDER, export
+from keyin.decode.rules import FAST_RULE_TOLERANCE, fastest_rule
+from keyin.pretrained import FOLDER, PREFIX, annotate, export
 
 EXAMPLE = "brownian_example.gif"  # 200 frames of Structured Brownian motion, 10 frames per second
 EXAMPLE_LABELS = "brownian_example_labels.json"  # its direction changes, keyin-import's label format
@@ -66,6 +69,28 @@ def example_command(args: argparse.Namespace) -> None:
     print(FOLDER / EXAMPLE, f"{len(frames)} frames, {len(turns)} turns")
 
 
+def rules_command(args: argparse.Namespace) -> None:
+    """Record keyin-discover's default rule for ``pretrained:<name>`` from a keyin-eval run of it on the
+    validation split (its own rule's and its variants' interior F1)."""
+    metrics = json.loads(args.metrics.read_text())
+    asked = f"{PREFIX}{args.name}"
+    if metrics.get("ckpt") != asked or metrics.get("split") != "val":
+        raise SystemExit(
+            f"{args.metrics} scored ckpt={metrics.get('ckpt')} on split={metrics.get('split')}; record the rule from "
+            f"`keyin-eval ckpt={asked} split=val` (validation clips choose, the test set only scores)"
+        )
+    own = load_checkpoint(asked)["hyper_parameters"]["discovery"]
+    method = metrics["method"]
+    val_f1 = {own: metrics["f1_interior"]}
+    val_f1.update({name[len(method) + 1:]: scores["f1_interior"] for name, scores in metrics.get("variants", {}).items()
+                   if name.startswith(f"{method}_")})
+    chosen = fastest_rule(val_f1)
+    record = {"rule": chosen, "val_f1_interior": {rule: round(f1, 4) for rule, f1 in sorted(val_f1.items())},
+              "val_clips": metrics["n_sequences"], "tolerance": FAST_RULE_TOLERANCE}
+    annotate(args.name, {"default_rule": record}, args.folder)
+    print(f"{asked}: keyin-discover's default rule is {chosen} ({record['val_f1_interior']})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(required=True)
@@ -76,6 +101,11 @@ def main() -> None:
     ship.add_argument("--folder", type=Path, default=FOLDER, help="where to write it and its models.json (default: the package)")
     ship.set_defaults(run=export_command)
     commands.add_parser("example", help="write the bundled example video and its labels").set_defaults(run=example_command)
+    rules = commands.add_parser("rules", help="record keyin-discover's default rule of a shipped model from its validation F1")
+    rules.add_argument("name", help="the shipped model: pretrained:<name>")
+    rules.add_argument("metrics", type=Path, help="metrics.json of `keyin-eval ckpt=pretrained:<name> split=val`")
+    rules.add_argument("--folder", type=Path, default=FOLDER, help="the folder of its models.json (default: the package)")
+    rules.set_defaults(run=rules_command)
     args = parser.parse_args()
     args.run(args)
 

@@ -8,8 +8,8 @@ A source is one of:
 * a robomimic-style HDF5 file (``.hdf5 .h5``): one video per ``data/demo_<i>/obs/<camera key>``;
 * a LeRobot v2 dataset folder (``meta/info.json``, one mp4 per episode and camera under ``videos/``):
   one video per episode of one camera;
-* a folder of any of these and of frame folders: each entry's videos (one level deep; hidden
-  entries and files of other kinds are passed over).
+* a folder of any of these, of frame folders and of LeRobot folders: each entry's videos (one level
+  deep; hidden entries and files of other kinds are passed over).
 
 Names are in natural order (``frame2`` before ``frame10``, ``demo_2`` before ``demo_10``). Each video
 has an id that names it in label files and in the manifest: its file or folder name, then
@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import re
 import zipfile
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -95,15 +96,15 @@ def find_videos(source: Path, camera_key: str | None, key: str = "source") -> It
     source = Path(source)
     if not source.exists():
         raise DatasetFormatError(f"{key} {source} does not exist; pass {key}=<a video file, an array or "
-                                 f"robomimic file, or a folder of videos or of image frames>")
+                                 f"robomimic file, a LeRobot v2 folder, or a folder of videos or of image frames>")
     if source.is_file():
         yield from file_videos(source, camera_key)
         return
-    if (source / LEROBOT_INFO).is_file():
-        yield from lerobot_videos(source, camera_key)
+    if is_lerobot(source):
+        yield from lerobot_videos(source, camera_key, key)
         return
     frames = image_files(source)
-    entries = by_name(p for p in visible(source) if p.is_dir() and image_files(p) or is_media(p))
+    entries = by_name(p for p in visible(source) if p.is_dir() and (image_files(p) or is_lerobot(p)) or is_media(p))
     if frames and entries:
         raise DatasetFormatError(
             f"{source} holds both image frames ({frames[0].name}, ...) and videos ({entries[0].name}, ...); "
@@ -114,12 +115,20 @@ def find_videos(source: Path, camera_key: str | None, key: str = "source") -> It
         return
     if not entries:
         known = ", ".join(VIDEO_SUFFIXES + IMAGE_SUFFIXES + ARRAY_SUFFIXES + HDF5_SUFFIXES)
-        raise DatasetFormatError(f"{source} holds no videos, frames or array files ({known}); pass another {key}=")
+        raise DatasetFormatError(
+            f"{source} holds no videos, frames, array files ({known}) or LeRobot folders; pass another {key}="
+        )
     for entry in entries:
-        if entry.is_dir():
+        if is_lerobot(entry):
+            yield from lerobot_videos(entry, camera_key, key)
+        elif entry.is_dir():
             yield frame_folder(entry, image_files(entry))
         else:
             yield from file_videos(entry, camera_key)
+
+
+def is_lerobot(folder: Path) -> bool:
+    return (folder / LEROBOT_INFO).is_file()
 
 
 def is_media(path: Path) -> bool:
@@ -255,36 +264,41 @@ def robomimic_videos(path: Path, camera_key: str | None) -> Iterator[Video]:
             yield Video(f"{path.name}[{demo}]", path, obs[camera_key][()])
 
 
-def lerobot_videos(root: Path, camera_key: str | None) -> Iterator[Video]:
+def lerobot_videos(root: Path, camera_key: str | None, key: str = "source") -> Iterator[Video]:
     """One video per episode of a LeRobot v2 folder, the mp4 that ``meta/info.json``'s ``video_path``
     template names for the episode and camera; episodes from ``meta/episodes.jsonl`` (or
-    ``total_episodes``), the frame rate from ``fps``."""
+    ``total_episodes``), the frame rate from ``fps``. Every episode's file is checked before the first
+    is decoded."""
     info = lerobot_info(root)
     camera = lerobot_camera(root, info, camera_key)
     episodes = lerobot_episodes(root, info)
     if not episodes:
-        raise DatasetFormatError(f"{root} lists no episodes (meta/episodes.jsonl, total_episodes); pass another source=")
-    for index in episodes:
-        try:
-            relative = info["video_path"].format(
-                episode_chunk=index // int(info["chunks_size"]), video_key=camera, episode_index=index
-            )
-        except (KeyError, IndexError, ValueError) as err:
-            raise DatasetFormatError(
-                f"{root / LEROBOT_INFO}: video_path {info['video_path']!r} is not a LeRobot v2 template ({err!r}); "
-                f"it names {{episode_chunk}}, {{video_key}} and {{episode_index}}"
-            ) from None
-        path = root / relative
-        if not path.is_file():
-            raise DatasetFormatError(
-                f"{root}: episode {index}'s video for camera {camera!r} should be {path}, which does not exist; "
-                f"download the dataset's videos/ too, or drop the episode from meta/episodes.jsonl"
-            )
+        raise DatasetFormatError(f"{root} lists no episodes (meta/episodes.jsonl, total_episodes); pass another {key}=")
+    paths = {index: root / lerobot_video_path(root, info, camera, index) for index in episodes}
+    missing = [index for index, path in paths.items() if not path.is_file()]
+    if missing:
+        raise DatasetFormatError(
+            f"{root}: {len(missing)} episode video(s) for camera {camera!r} do not exist, e.g. episode {missing[0]}'s "
+            f"{paths[missing[0]]}; download the dataset's videos/ too, or drop those episodes from meta/episodes.jsonl"
+        )
+    for index, path in paths.items():
         yield Video(f"{root.name}[episode_{index}]", path, video_file(path).frames, float(info["fps"]))
 
 
+def lerobot_video_path(root: Path, info: dict, camera: str, index: int) -> str:
+    """``video_path`` filled in for one episode and camera (episode_chunk = index // chunks_size)."""
+    try:
+        return info["video_path"].format(episode_chunk=index // info["chunks_size"], video_key=camera, episode_index=index)
+    except (KeyError, IndexError, ValueError) as err:
+        raise DatasetFormatError(
+            f"{root / LEROBOT_INFO}: video_path {info['video_path']!r} is not a LeRobot v2 template ({err!r}); "
+            f"it names {{episode_chunk}}, {{video_key}} and {{episode_index}}"
+        ) from None
+
+
 def lerobot_info(root: Path) -> dict:
-    """``meta/info.json`` of a LeRobot folder, checked to be the v2 layout (one mp4 per episode)."""
+    """``meta/info.json`` of a LeRobot folder, checked to be the v2 layout (one mp4 per episode) with
+    the fields keyin reads well formed."""
     path = root / LEROBOT_INFO
     try:
         info = json.loads(path.read_text())
@@ -293,13 +307,25 @@ def lerobot_info(root: Path) -> dict:
     version = str(info.get("codebase_version", "")) if isinstance(info, dict) else ""
     if not version.startswith("v2"):
         raise DatasetFormatError(
-            f"{path} says codebase_version {version or 'nothing'}; keyin-import reads LeRobot's v2.0/v2.1 layout "
+            f"{path} says codebase_version {version or 'nothing'}; keyin reads LeRobot's v2.0/v2.1 layout "
             f"(one mp4 per episode and camera; v3.0 packs many episodes into one file): download the dataset's "
             f"v2.1 revision, or export the episodes as mp4 files and pass their folder"
         )
     missing = [key for key in LEROBOT_KEYS if key not in info]
     if missing:
         raise DatasetFormatError(f"{path} has no {', '.join(missing)}; a LeRobot v2 info.json holds {', '.join(LEROBOT_KEYS)}")
+    counts = {"chunks_size": 1, "total_episodes": 0}
+    malformed = [
+        *(f"{name}={info[name]!r} (a whole number >= {least})" for name, least in counts.items()
+          if name in info and not (isinstance(info[name], int) and not isinstance(info[name], bool) and info[name] >= least)),
+        *([f"fps={info['fps']!r} (a number > 0)"]
+          if not (isinstance(info["fps"], (int, float)) and not isinstance(info["fps"], bool) and info["fps"] > 0) else []),
+        *([f"video_path={info['video_path']!r} (a path template)"] if not isinstance(info["video_path"], str) else []),
+        *([f"features of type {type(info['features']).__name__} (an object of feature name: description)"]
+          if not isinstance(info["features"], dict) else []),
+    ]
+    if malformed:
+        raise DatasetFormatError(f"{path} holds {'; '.join(malformed)}; fix the file (LeRobot v2 writes these fields)")
     return info
 
 
@@ -320,13 +346,21 @@ def lerobot_camera(root: Path, info: dict, camera_key: str | None) -> str:
 
 
 def lerobot_episodes(root: Path, info: dict) -> list[int]:
-    """The episode indices of ``meta/episodes.jsonl``, or 0 … total_episodes − 1 where it is missing."""
+    """The episode indices of ``meta/episodes.jsonl``, or 0 … total_episodes − 1 where it is missing.
+
+    Raises:
+        DatasetFormatError: a line without an integer ``episode_index``, or one index listed twice.
+    """
     path = root / "meta" / "episodes.jsonl"
     if not path.is_file():
-        return list(range(int(info.get("total_episodes", 0))))
+        return list(range(info.get("total_episodes", 0)))
     try:
-        return sorted(int(json.loads(line)["episode_index"]) for line in path.read_text().splitlines() if line.strip())
+        indices = [int(json.loads(line)["episode_index"]) for line in path.read_text().splitlines() if line.strip()]
     except (ValueError, KeyError, TypeError) as err:
         raise DatasetFormatError(
             f"{path}: a line is not a JSON object with an integer episode_index ({err!r}); fix or remove the line"
         ) from None
+    twice = sorted(index for index, count in Counter(indices).items() if count > 1)
+    if twice:
+        raise DatasetFormatError(f"{path} lists episode {twice[0]} more than once; keep one line per episode")
+    return sorted(indices)

@@ -21,6 +21,23 @@ from keyin.models.keyin import KEYIN
 
 KEYIN_RULES = ("offsets", "boundaries", "map", "segmentation")
 VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
+# The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
+# posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every candidate segment's
+# frames (~16 ms; benchmarks/results/discover_speed.md).
+RULES_BY_COST = ("boundaries", "offsets", "map")
+FAST_RULE_TOLERANCE = 0.01  # how far below map's validation F1 a cheaper rule may be and still be chosen
+
+
+def fastest_rule(val_f1: dict[str, float], tolerance: float = FAST_RULE_TOLERANCE) -> str:
+    """The cheapest rule of :data:`RULES_BY_COST` whose validation F1 is at least ``map``'s less
+    ``tolerance`` (``map`` itself when no cheaper one is); rules missing from ``val_f1`` are passed over.
+
+    Raises:
+        ValueError: ``val_f1`` has no ``map`` score to compare with.
+    """
+    if "map" not in val_f1:
+        raise ValueError(f"fastest_rule compares with map's validation F1, which {sorted(val_f1)} lacks")
+    return next(rule for rule in RULES_BY_COST if rule in val_f1 and val_f1[rule] >= val_f1["map"] - tolerance)
 
 
 def boundary_keyframes(scores: Tensor, lengths: Tensor, n_keyframes: int, max_offset: int) -> list[list[int]]:

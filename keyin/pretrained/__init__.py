@@ -82,3 +82,25 @@ def export(checkpoint: Mapping[str, Any], name: str, card: Mapping[str, Any], fo
     models[name] = {**card, "file": file.name, "sha256": sha256_of(file), "bytes": file.stat().st_size}
     atomic_write_text(folder / REGISTRY, json.dumps(models, indent=1, sort_keys=True) + "\n")
     return file
+
+
+def annotate(name: str, fields: Mapping[str, Any], folder: Path = FOLDER) -> None:
+    """Add ``fields`` to the card of the shipped model ``name`` in ``models.json``.
+
+    Raises:
+        CheckpointError: no model of that name is shipped in ``folder``.
+    """
+    models = registry(folder)
+    if name not in models:
+        raise CheckpointError(f"no pretrained model named '{name}' in {folder / REGISTRY}")
+    models[name] = {**models[name], **fields}
+    atomic_write_text(folder / REGISTRY, json.dumps(models, indent=1, sort_keys=True) + "\n")
+
+
+def recorded_rule(path: str | Path, folder: Path = FOLDER) -> dict[str, Any] | None:
+    """The default rule recorded for ``pretrained:<name>`` (``{"rule", "val_f1_interior", ...}``), or None
+    for any other checkpoint and for a shipped model without one."""
+    if not is_pretrained(path):
+        return None
+    card = registry(folder).get(str(path)[len(PREFIX):], {})
+    return card.get("default_rule")

@@ -108,12 +108,13 @@ def test_a_lerobot_folder_imports_each_episode_from_the_camera_asked_for(tmp_pat
     lengths = [20, 26, 14]
     top = [frames(n) for n in lengths]
     wrist = [frames(n)[::-1].copy() for n in lengths]  # the wrist camera plays each episode backwards
-    root = write_lerobot(tmp_path / "pusht", {"observation.images.top": top, "observation.images.wrist": wrist})
+    cameras = {"observation.images.top": top, "observation.images.wrist": wrist}
+    root = write_lerobot(tmp_path / "pusht", cameras, fps=2 * FPS)  # info.json's rate, not the mp4 stream's
     labels = labels_file(tmp_path, {"pusht[episode_2]": [5]})
     folder, stats = import_to(tmp_path, root, camera_key="observation.images.wrist", labels=labels)
     sources = read_manifest(folder)["sources"]
     assert [s["id"] for s in sources] == [f"pusht[episode_{i}]" for i in range(3)]  # episode 2 is in chunk-001
-    assert all(s["fps"] == FPS for s in sources)
+    assert all(s["fps"] == 2 * FPS for s in sources)
     read, origins = clips(folder), clip_origins(folder, "train")
     assert len(read) == 2 + 3 + 2 and stats["videos"] == 3
     assert frame_numbers(read[0]["frames"]) == list(range(19, 7, -1))  # the wrist video, frame by frame
@@ -121,11 +122,20 @@ def test_a_lerobot_folder_imports_each_episode_from_the_camera_asked_for(tmp_pat
     assert keyed == [("pusht[episode_2]", 5)]
 
 
-def test_a_one_camera_lerobot_folder_needs_no_camera_key(tmp_path):
+def test_a_one_camera_lerobot_folder_needs_no_camera_key_nor_episodes_jsonl(tmp_path):
     root = write_lerobot(tmp_path / "solo", {"observation.image": [frames(20), frames(30)]}, version="v2.0")
+    (root / "meta" / "episodes.jsonl").unlink()  # then info.json's total_episodes lists them
     folder, stats = import_to(tmp_path, root)
     assert [s["id"] for s in read_manifest(folder)["sources"]] == ["solo[episode_0]", "solo[episode_1]"]
     assert frame_numbers(clips(folder)[0]["frames"]) == list(range(12))
+
+
+def test_a_folder_of_lerobot_folders_imports_every_episode_of_each(tmp_path):
+    source = tmp_path / "datasets"
+    write_lerobot(source / "b_set", {"observation.image": [frames(20)]})
+    write_lerobot(source / "a_set", {"observation.image": [frames(20), frames(20)]})
+    folder, _ = import_to(tmp_path, source)
+    assert [s["id"] for s in read_manifest(folder)["sources"]] == ["a_set[episode_0]", "a_set[episode_1]", "b_set[episode_0]"]
 
 
 def test_a_folder_of_videos_imports_each_and_skips_a_too_short_one_with_a_warning(tmp_path):
@@ -178,6 +188,12 @@ def bad(tmp_path_factory):
     write_lerobot(root / "lerobot_v3", {"observation.image": [frames(20)]}, version="v3.0")
     write_lerobot(root / "lerobot_gap", {"observation.image": [frames(20), frames(20)]})
     (root / "lerobot_gap/videos/chunk-000/observation.image/episode_000001.mp4").unlink()
+    for name, change in (("chunks", {"chunks_size": 0}), ("features", {"features": ["observation.image"]}),
+                         ("fps", {"fps": None})):
+        info_path = write_lerobot(root / f"lerobot_bad_{name}", {"observation.image": [frames(20)]}) / "meta" / "info.json"
+        info_path.write_text(json.dumps({**json.loads(info_path.read_text()), **change}))
+    episodes = write_lerobot(root / "lerobot_twice", {"observation.image": [frames(20)]}) / "meta" / "episodes.jsonl"
+    episodes.write_text(episodes.read_text() * 2)
     labels_file(root, {"good.mp4": [12, 40]}).rename(root / "past.json")
     labels_file(root, {"bad.mp4": [1]}).rename(root / "unknown.json")
     return root
@@ -202,10 +218,14 @@ BAD_INPUTS = [
     ("lerobot-which-camera", "lerobot", {},
      "{bad}/lerobot has 2 cameras; pick one: camera_key=observation.images.top, camera_key=observation.images.wrist"),
     ("lerobot-camera-key", "lerobot", {"camera_key": "front"}, "{bad}/lerobot has no camera 'front'; pick one"),
-    ("lerobot-v3", "lerobot_v3", {}, "{bad}/lerobot_v3/meta/info.json says codebase_version v3.0; keyin-import reads "
+    ("lerobot-v3", "lerobot_v3", {}, "{bad}/lerobot_v3/meta/info.json says codebase_version v3.0; keyin reads "
      "LeRobot's v2.0/v2.1 layout"),
-    ("lerobot-missing-video", "lerobot_gap", {}, "{bad}/lerobot_gap: episode 1's video for camera 'observation.image' "
-     "should be {bad}/lerobot_gap/videos/chunk-000/observation.image/episode_000001.mp4, which does not exist"),
+    ("lerobot-missing-video", "lerobot_gap", {}, "{bad}/lerobot_gap: 1 episode video(s) for camera 'observation.image' "
+     "do not exist, e.g. episode 1's {bad}/lerobot_gap/videos/chunk-000/observation.image/episode_000001.mp4"),
+    ("lerobot-chunks-size", "lerobot_bad_chunks", {}, "info.json holds chunks_size=0 (a whole number >= 1); fix the file"),
+    ("lerobot-features", "lerobot_bad_features", {}, "info.json holds features of type list (an object of feature name"),
+    ("lerobot-fps", "lerobot_bad_fps", {}, "info.json holds fps=None (a number > 0); fix the file"),
+    ("lerobot-episode-twice", "lerobot_twice", {}, "episodes.jsonl lists episode 0 more than once; keep one line per episode"),
     ("label-past-end", "good.mp4", {"labels": "past.json"},
      "{bad}/past.json: video 'good.mp4' has keyframe 40, past its end: {bad}/good.mp4 has 40 frames (0-39); fix the label"),
     ("label-unknown-video", "good.mp4", {"labels": "unknown.json"},
