@@ -1,13 +1,15 @@
 """keyin-discover's throughput: kept frames per second through its real path on one long synthetic
 Brownian clip with known turns, and the time of each part.
 
-    python benchmarks/discover_speed.py --frames 600 [--ckpt <stage-2 checkpoint>] \
+    python benchmarks/discover_speed.py --frames 600 [--ckpt <stage-2 checkpoint> ...] [--rules map boundaries] \
         --out benchmarks/results/discover_speed.md
 
 Models: smoke-sized keyin_plus (untrained weights: the speed does not depend on them) at Brownian's
 sizes (32x32 grey, 5 + 30 frames, M 6, S 10) and at pushing's (64x64 RGB, 1 + 30, M 6, S 6), and
-with ``--ckpt`` a trained checkpoint, whose merged keyframes are also scored against the clip's
-turns. Every model runs the default rule (map with the label-free knee) through
+with ``--ckpt`` trained checkpoints (``pretrained:<name>`` too), whose merged keyframes are also scored
+against the clip's turns (meaningful for a Brownian model only: the clip is Brownian motion, fitted to
+each model's size). Every model runs each rule of ``--rules`` (default: map with the label-free knee,
+the rule keyin-discover's ``auto`` falls back to) through
 ``keyin.pipelines.discover.discover_videos``, as keyin-discover does; the parts are timed by wrapping
 the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
 ``KEYIN.keyframes`` (encoder and posterior, run by the rule and by the score), the interpolator's
@@ -45,6 +47,7 @@ from keyin.eval.f1 import keyframe_scores
 from keyin.lit.registry import load_trained_module
 from keyin.models.keyin import KEYIN
 from keyin.pipelines.discover import discover_videos
+from keyin.pretrained import is_pretrained
 
 PARTS = {  # part -> (owner, attribute) of the function timed
     "encoder + posterior": (KEYIN, "keyframes"),
@@ -97,8 +100,8 @@ def long_clip(folder: Path, n_frames: int) -> tuple[Path, Path, list[int]]:
     return folder / "brownian.npy", folder / "brownian.mp4", np.flatnonzero(arrays["keyframes"]).tolist()
 
 
-def run(module, label: str, clip: Path, movie: Path, turns: list[int], out: Path) -> dict:
-    """One model through keyin-discover's path; its times, frames per second and, if trained, F1."""
+def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int], out: Path) -> dict:
+    """One model and rule through keyin-discover's path; its times, frames per second and F1 on the clip."""
     sizes = module.hparams.stage1
     n_cond, n_future = sizes["n_cond"], sizes["n_future"]
     spec = ImportSpec(image_size=sizes["image_size"], channels=sizes["channels"], n_cond=n_cond, n_future=n_future,
@@ -107,29 +110,29 @@ def run(module, label: str, clip: Path, movie: Path, turns: list[int], out: Path
     read_videos(movie, spec, None, None, progress=False)
     decode = time.perf_counter() - started
     videos, _, _ = read_videos(clip, spec, None, None, progress=False)
-    discoverer = functools.partial(module.discover, discovery="map", keyframe_cost="knee")
+    discoverer = functools.partial(module.discover, discovery=rule, keyframe_cost="knee")
     with timed_parts() as parts:
         started = time.perf_counter()
-        summary = discover_videos(videos, discoverer, module.keyframe_probabilities, out / label, {}, n_cond, n_future,
-                                  1, n_future // 2, progress=False)
+        summary = discover_videos(videos, discoverer, module.keyframe_probabilities, out / label / rule, {}, n_cond,
+                                  n_future, 1, n_future // 2, progress=False)
         total = time.perf_counter() - started
-    record = json.loads((out / label / summary["videos"]["brownian.npy"]["folder"] / "keyframes.json").read_text())
+    record = json.loads((out / label / rule / summary["videos"]["brownian.npy"]["folder"] / "keyframes.json").read_text())
     found = [keyframe["frame"] for keyframe in record["keyframes"]]
     inside = [t for t in turns if n_cond <= t < len(videos[0].frames) - 1]
     scores = keyframe_scores([found], [inside], len(videos[0].frames))
     parts = dict(parts, decode=decode, rest=total - sum(parts.values()))
-    return dict(label=label, frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
+    return dict(label=f"{label}, {rule}", frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
                 found=len(found), turns=len(inside), f1=scores["f1"], f1_tol1=scores["f1_tol1"])
 
 
-def row(result: dict, trained: bool) -> str:
+def row(result: dict, scored: bool) -> str:
     parts = result["parts"]
-    model_seconds = result["total"] - parts["files"]
+    model_seconds = result["total"] - parts.get("files", 0.0)
     cells = [result["label"], f"{result['frames']} / {result['windows']}",
              f"{result['frames'] / model_seconds:.0f}", f"{result['frames'] / (result['total'] + parts['decode']):.0f}"]
-    cells += [f"{1000 * parts[p] / result['frames']:.2f}" for p in ("decode", *PARTS, "rest")]
+    cells += [f"{1000 * parts.get(p, 0.0) / result['frames']:.2f}" for p in ("decode", *PARTS, "rest")]
     cells.append(f"{result['f1']:.3f} / {result['f1_tol1']:.3f} ({result['found']} found, {result['turns']} turns)"
-                 if trained else "untrained")
+                 if scored else "– (untrained, or not a Brownian model)")
     return "| " + " | ".join(cells) + " |"
 
 
@@ -137,7 +140,8 @@ def row(result: dict, trained: bool) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=600, help="frames of the long clip")
-    parser.add_argument("--ckpt", help="also a trained stage-2 checkpoint (Brownian sizes)")
+    parser.add_argument("--ckpt", nargs="*", default=[], help="also trained stage-2 checkpoints (pretrained:<name> too)")
+    parser.add_argument("--rules", nargs="+", default=["map"], help="the rules each model runs (map, boundaries, offsets)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--note", help="a line on the conditions of the run (other load on the machine)")
     parser.add_argument("--out", type=Path)
@@ -145,27 +149,31 @@ def main() -> None:
     torch.set_num_threads(args.threads)
     models = [("smoke, Brownian size (32x32x1)", smoke_module("brownian"), False),
               ("smoke, pushing size (64x64x3)", smoke_module("pushing"), False)]
-    if args.ckpt:
-        module, config = load_trained_module(args.ckpt, "keyframes")
-        models.append((f"trained {config['model']['name']} ({Path(args.ckpt).parents[2].name})", module, True))
+    for ckpt in args.ckpt:
+        module, config = load_trained_module(ckpt, "keyframes")
+        name = ckpt if is_pretrained(ckpt) else Path(ckpt).parents[2].name
+        brownian = (module.hparams.stage1["image_size"], module.hparams.stage1["channels"]) == (32, 1)
+        models.append((f"trained {config['model']['name']} ({name})", module, brownian))
     with tempfile.TemporaryDirectory() as tmp:
         clip, movie, turns = long_clip(Path(tmp), args.frames)
-        results = [(run(module, label, clip, movie, turns, Path(tmp)), trained) for label, module, trained in models]
+        results = [(run(module, label, rule, clip, movie, turns, Path(tmp)), scored)
+                   for label, module, scored in models for rule in args.rules
+                   if rule != "boundaries" or module.hparams.offset_evidence]
     command = " ".join(["python benchmarks/discover_speed.py", f"--frames {args.frames}", f"--threads {args.threads}"]
-                       + ([f"--ckpt {args.ckpt}"] if args.ckpt else []))
+                       + ([f"--ckpt {' '.join(args.ckpt)}"] if args.ckpt else []) + [f"--rules {' '.join(args.rules)}"])
     report = "\n".join([
         f"## keyin-discover throughput on a {args.frames}-frame Brownian clip\n",
         f"- command: `PYTHONPATH=. {command}`",
         f"- machine: {cpu_model()}, {os.cpu_count()} logical cores, {args.threads} thread(s) used, torch "
         f"{torch.__version__}, {date.today().isoformat()}",
         *([f"- note: {args.note}"] if args.note else []),
-        "- path: keyin.pipelines.discover.discover_videos with rule map and the label-free knee, windows every n_future // 2 "
+        "- path: keyin.pipelines.discover.discover_videos with each rule (map with the label-free knee), windows every n_future // 2 "
         "kept frames (each frame in about two windows), batches of 32 windows, frame stride 1",
         "",
         "| model | kept frames / windows | frames/s (model) | frames/s (all) | decode | encoder + posterior | "
         "segment costs | DP | files | rest | F1 / ±1 F1 of the merged keyframes |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
-        *(row(result, trained) for result, trained in results),
+        *(row(result, scored) for result, scored in results),
         "",
         "Parts in milliseconds per kept frame. *frames/s (model)*: kept frames over the time from the windows to the "
         "merged keyframes (files excluded); *all*: over decoding, that and writing the JSON and pictures. *decode*: "

@@ -128,7 +128,7 @@ def discover(cfg: DictConfig) -> dict:
     discoverer = functools.partial(module.discover, discovery=model["rule"], keyframe_cost=model["keyframe_cost"])
     summary = discover_videos(
         videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
-        stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress,
+        stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress, pictures=bool(cfg.pictures),
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
     write_metrics(summary, run_dir())

@@ -140,27 +140,34 @@ def caption(keyframe: Keyframe) -> str:
 
 def write_video_folder(
     folder: Path, video: ImportedVideo, keyframes: Sequence[Keyframe], record: Mapping[str, Any], n_cond: int,
-    frame_stride: int,
+    frame_stride: int, pictures: bool = True,
 ) -> Path:
-    """Write the video's files (:data:`FILES`) into a temporary folder beside ``folder`` and rename
-    it into place, so a crash leaves no half-written folder."""
+    """Write the video's files (:data:`FILES`; only keyframes.json without ``pictures``) into a
+    temporary folder beside ``folder`` and rename it into place, so a crash leaves no half-written folder."""
     staging = temporary_path(folder)
-    kept = [keyframe.frame // frame_stride for keyframe in keyframes]
     try:
         staging.mkdir(parents=True)
         atomic_write_text(staging / "keyframes.json", json.dumps(dict(record), indent=1))
-        save_contact_sheet(staging / "contact_sheet.png", video.frames[kept], [caption(k) for k in keyframes], video.id)
-        save_timeline(
-            staging / "timeline.png", video.n_frames, [k.frame for k in keyframes], [k.score for k in keyframes],
-            n_cond * frame_stride, video.fps, video.labels, video.id,
-        )
-        labels = None if video.labels is None else video.keyframes(frame_stride)
-        duration = 1000 * frame_stride / video.fps if video.fps else 100
-        save_annotated_gif(staging / "annotated.gif", video.frames, n_cond, kept, labels, duration)
+        if pictures:
+            save_pictures(staging, video, keyframes, n_cond, frame_stride)
         replace_folder(staging, folder)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return folder
+
+
+def save_pictures(folder: Path, video: ImportedVideo, keyframes: Sequence[Keyframe], n_cond: int, frame_stride: int) -> None:
+    """One video's contact sheet, timeline and annotated GIF into ``folder`` (at a cheap rule, most of
+    keyin-discover's time: benchmarks/results/discover_speed.md)."""
+    kept = [keyframe.frame // frame_stride for keyframe in keyframes]
+    save_contact_sheet(folder / "contact_sheet.png", video.frames[kept], [caption(k) for k in keyframes], video.id)
+    save_timeline(
+        folder / "timeline.png", video.n_frames, [k.frame for k in keyframes], [k.score for k in keyframes],
+        n_cond * frame_stride, video.fps, video.labels, video.id,
+    )
+    labels = None if video.labels is None else video.keyframes(frame_stride)
+    duration = 1000 * frame_stride / video.fps if video.fps else 100
+    save_annotated_gif(folder / "annotated.gif", video.frames, n_cond, kept, labels, duration)
 
 
 def discover_videos(
@@ -176,8 +183,10 @@ def discover_videos(
     seam: int = 1,
     batch_size: int = 32,
     progress: bool = True,
+    pictures: bool = True,
 ) -> dict[str, Any]:
-    """Discover every video's keyframes and write its folder ``<folder>/<video name>/``.
+    """Discover every video's keyframes and write its folder ``<folder>/<video name>/`` (keyframes.json,
+    and with ``pictures`` the contact sheet, timeline and annotated GIF).
 
     Args:
         model: what ``keyframes.json`` says about the model (checkpoint, method, rule, sizes).
@@ -198,7 +207,7 @@ def discover_videos(
                 advance=lambda windows: bar.update(task, advance=windows),
             )
             record = keyframes_record(video, keyframes, model, n_cond, frame_stride, window_stride)
-            write_video_folder(folder / name, video, keyframes, record, n_cond, frame_stride)
+            write_video_folder(folder / name, video, keyframes, record, n_cond, frame_stride, pictures)
             found[video.id] = {"folder": name, "keyframes": len(keyframes)}
     seconds = time.perf_counter() - started
     kept = sum(len(video.frames) for video in videos)

@@ -62,6 +62,18 @@ def test_every_video_gets_its_keyframes_json_and_pictures(root, frame_stride):
     assert json.loads((folder / "long.mp4" / "keyframes.json").read_text())["labels"] == EVENTS
 
 
+def test_without_pictures_only_keyframes_json_is_written_with_the_same_keyframes(root):
+    runs = {}
+    for pictures in ("true", "false"):
+        result = run("discover", "ckpt=keyin.ckpt", "input=videos/long.mp4", "rule=boundaries", f"pictures={pictures}",
+                     "progress=false", f"hydra.run.dir=pictures_{pictures}", cwd=root)
+        assert result.returncode == 0, result.stderr
+        runs[pictures] = root / f"pictures_{pictures}" / "long.mp4"
+    assert written(runs["false"]) == ["keyframes.json"] and written(runs["true"]) == FILES
+    found = {key: json.loads((folder / "keyframes.json").read_text())["keyframes"] for key, folder in runs.items()}
+    assert found["false"] == found["true"]
+
+
 @pytest.fixture(scope="module")
 def bad(root):
     """Bad inputs beside the good checkpoint."""
