@@ -1,5 +1,5 @@
-"""keyin-discover's throughput: kept frames per second through its real path on one long synthetic
-Brownian clip with known turns, and the time of each part.
+"""keyin-discover's throughput: kept frames per second through its real path on one long clip with
+known keyframes (a Brownian motion, or pushing demos back to back), and the time of each part.
 
     python benchmarks/discover_speed.py --frames 600 [--ckpt <stage-2 checkpoint> ...] [--rules map boundaries] \
         --out benchmarks/results/discover_speed.md
@@ -7,8 +7,8 @@ Brownian clip with known turns, and the time of each part.
 Models: smoke-sized keyin_plus (untrained weights: the speed does not depend on them) at Brownian's
 sizes (32x32 grey, 5 + 30 frames, M 6, S 10) and at pushing's (64x64 RGB, 1 + 30, M 6, S 6), and
 with ``--ckpt`` trained checkpoints (``pretrained:<name>`` too), whose merged keyframes are also scored
-against the clip's turns (meaningful for a Brownian model only: the clip is Brownian motion, fitted to
-each model's size). Every model runs each rule of ``--rules`` (default: map with the label-free knee,
+against the clip's labels when the model was trained on the clip's dataset (``--clip``; the clip is
+fitted to every model's size). Every model runs each rule of ``--rules`` (default: map with the label-free knee,
 the rule keyin-discover's ``auto`` falls back to) through
 ``keyin.pipelines.discover.discover_videos``, as keyin-discover does; the parts are timed by wrapping
 the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
@@ -42,6 +42,7 @@ import keyin.pipelines.discover
 from common import cpu_model, publish
 from keyin.cli.app import CONFIG_MODULE
 from keyin.data.brownian import BrownianGenerator
+from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.eval.f1 import keyframe_scores
 from keyin.lit.registry import load_trained_module
@@ -91,13 +92,28 @@ def smoke_module(dataset: str):
     return instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams)).eval()
 
 
-def long_clip(folder: Path, n_frames: int) -> tuple[Path, Path, list[int]]:
-    """A Brownian clip of ``n_frames`` 32x32 frames as .npy (lossless) and .mp4, and its turns."""
-    generator = BrownianGenerator(n_cond=1, n_future=n_frames - 1)
-    arrays, _ = generator.generate(0, seed=12345)
-    np.save(folder / "brownian.npy", arrays["frames"])
-    iio.imwrite(folder / "brownian.mp4", np.repeat(arrays["frames"], 3, axis=-1), plugin="pyav", codec="libx264", fps=10)
-    return folder / "brownian.npy", folder / "brownian.mp4", np.flatnonzero(arrays["keyframes"]).tolist()
+def long_clip(folder: Path, n_frames: int, kind: str, data_dir: Path) -> tuple[Path, Path, list[int]]:
+    """A long clip as .npy (lossless) and .mp4, and its labelled keyframes: ``brownian``, one Brownian
+    motion of ``n_frames`` 32x32 frames and its turns; ``pushing``, the first pushing test demos
+    (64x64 RGB, each to its last valid frame) back to back until ``n_frames``, and their labels."""
+    if kind == "brownian":
+        arrays, _ = BrownianGenerator(n_cond=1, n_future=n_frames - 1).generate(0, seed=12345)
+        frames, labels = arrays["frames"], np.flatnonzero(arrays["keyframes"]).tolist()
+    else:
+        demos = load_arrays(data_dir / "pushing" / "test-00000.h5", ("frames", "keyframes", "length"))
+        parts, labels, start = [], [], 0
+        for demo, flags, length in zip(demos["frames"], demos["keyframes"], demos["length"]):
+            if start >= n_frames:
+                break
+            parts.append(demo[:length])
+            labels += [start + int(t) for t in np.flatnonzero(flags[:length])]
+            start += int(length)
+        frames = np.concatenate(parts)[:n_frames]
+        labels = [t for t in labels if t < len(frames)]
+    np.save(folder / "clip.npy", frames)
+    rgb = frames if frames.shape[-1] == 3 else np.repeat(frames, 3, axis=-1)
+    iio.imwrite(folder / "clip.mp4", rgb, plugin="pyav", codec="libx264", fps=10)
+    return folder / "clip.npy", folder / "clip.mp4", labels
 
 
 def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int], out: Path) -> dict:
@@ -116,7 +132,7 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
         summary = discover_videos(videos, discoverer, module.keyframe_probabilities, out / label / rule, {}, n_cond,
                                   n_future, 1, n_future // 2, progress=False)
         total = time.perf_counter() - started
-    record = json.loads((out / label / rule / summary["videos"]["brownian.npy"]["folder"] / "keyframes.json").read_text())
+    record = json.loads((out / label / rule / summary["videos"]["clip.npy"]["folder"] / "keyframes.json").read_text())
     found = [keyframe["frame"] for keyframe in record["keyframes"]]
     inside = [t for t in turns if n_cond <= t < len(videos[0].frames) - 1]
     scores = keyframe_scores([found], [inside], len(videos[0].frames))
@@ -131,8 +147,8 @@ def row(result: dict, scored: bool) -> str:
     cells = [result["label"], f"{result['frames']} / {result['windows']}",
              f"{result['frames'] / model_seconds:.0f}", f"{result['frames'] / (result['total'] + parts['decode']):.0f}"]
     cells += [f"{1000 * parts.get(p, 0.0) / result['frames']:.2f}" for p in ("decode", *PARTS, "rest")]
-    cells.append(f"{result['f1']:.3f} / {result['f1_tol1']:.3f} ({result['found']} found, {result['turns']} turns)"
-                 if scored else "– (untrained, or not a Brownian model)")
+    cells.append(f"{result['f1']:.3f} / {result['f1_tol1']:.3f} ({result['found']} found, {result['turns']} labelled)"
+                 if scored else "– (untrained, or another dataset's model)")
     return "| " + " | ".join(cells) + " |"
 
 
@@ -143,6 +159,9 @@ def main() -> None:
     parser.add_argument("--ckpt", nargs="*", default=[], help="also trained stage-2 checkpoints (pretrained:<name> too)")
     parser.add_argument("--rules", nargs="+", default=["map"], help="the rules each model runs (map, boundaries, offsets)")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--clip", choices=("brownian", "pushing"), default="brownian",
+                        help="the long clip: one Brownian motion, or pushing test demos back to back (needs data/pushing)")
+    parser.add_argument("--data-dir", type=Path, default=Path("data"))
     parser.add_argument("--note", help="a line on the conditions of the run (other load on the machine)")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
@@ -152,17 +171,17 @@ def main() -> None:
     for ckpt in args.ckpt:
         module, config = load_trained_module(ckpt, "keyframes")
         name = ckpt if is_pretrained(ckpt) else Path(ckpt).parents[2].name
-        brownian = (module.hparams.stage1["image_size"], module.hparams.stage1["channels"]) == (32, 1)
-        models.append((f"trained {config['model']['name']} ({name})", module, brownian))
+        models.append((f"trained {config['model']['name']} ({name})", module, config["dataset"]["name"] == args.clip))
     with tempfile.TemporaryDirectory() as tmp:
-        clip, movie, turns = long_clip(Path(tmp), args.frames)
+        clip, movie, turns = long_clip(Path(tmp), args.frames, args.clip, args.data_dir)
         results = [(run(module, label, rule, clip, movie, turns, Path(tmp)), scored)
                    for label, module, scored in models for rule in args.rules
                    if rule != "boundaries" or module.hparams.offset_evidence]
-    command = " ".join(["python benchmarks/discover_speed.py", f"--frames {args.frames}", f"--threads {args.threads}"]
+    command = " ".join(["python benchmarks/discover_speed.py", f"--frames {args.frames}", f"--threads {args.threads}",
+                        f"--clip {args.clip}"]
                        + ([f"--ckpt {' '.join(args.ckpt)}"] if args.ckpt else []) + [f"--rules {' '.join(args.rules)}"])
     report = "\n".join([
-        f"## keyin-discover throughput on a {args.frames}-frame Brownian clip\n",
+        f"## keyin-discover throughput on a {args.frames}-frame {args.clip} clip\n",
         f"- command: `PYTHONPATH=. {command}`",
         f"- machine: {cpu_model()}, {os.cpu_count()} logical cores, {args.threads} thread(s) used, torch "
         f"{torch.__version__}, {date.today().isoformat()}",

@@ -136,7 +136,7 @@ def test_rules_records_the_cheapest_rule_within_0_01_of_map_and_keyin_discover_u
     main()
     recorded = pretrained.registry(tmp_path)["smoke"]["default_rule"]
     assert recorded == {"rule": "offsets", "val_f1_interior": {"boundaries": 0.4, "map": 0.505, "offsets": 0.5},
-                        "val_clips": 4, "tolerance": 0.01}
+                        "val_clips": 4, "tolerance": 0.01, "metrics": str(tmp_path / "metrics_val.json")}
     assert "default rule is offsets" in capsys.readouterr().out
     module, _ = load_trained_module("pretrained:smoke")
     auto = OmegaConf.create({"rule": "auto", "ckpt": "pretrained:smoke"})

@@ -86,7 +86,7 @@ def rules_command(args: argparse.Namespace) -> None:
                    if name.startswith(f"{method}_")})
     chosen = fastest_rule(val_f1)
     record = {"rule": chosen, "val_f1_interior": {rule: round(f1, 4) for rule, f1 in sorted(val_f1.items())},
-              "val_clips": metrics["n_sequences"], "tolerance": FAST_RULE_TOLERANCE}
+              "val_clips": metrics["n_sequences"], "tolerance": FAST_RULE_TOLERANCE, "metrics": str(args.metrics)}
     annotate(args.name, {"default_rule": record}, args.folder)
     print(f"{asked}: keyin-discover's default rule is {chosen} ({record['val_f1_interior']})")
 
