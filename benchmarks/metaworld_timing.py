@@ -1,0 +1,86 @@
+"""Which timing levers keep a fixed keyframe pattern from matching Meta-World's labels, measured on the
+labels alone (no frames rendered).
+
+    MUJOCO_GL=egl OMP_NUM_THREADS=1 python benchmarks/metaworld_timing.py --clips 300 \
+        --out benchmarks/results/metaworld_timing.md
+
+For each setting of the grid (the speed cap's lower end ``speed_min``, the pause at a new phase
+``max_pause`` in env steps, the clip's ``n_future``), the dataset's generator (conf/dataset/metaworld.yaml
+otherwise) plays the first ``--clips`` episodes of the validation seeds with its renderer stubbed out:
+the labels, valid lengths and redraws are exactly those keyin-generate writes (the first row is the
+released dataset's val split). Scored on them by interior F1 (docs/evaluation.md), each pattern at its
+best spacing on these clips (so an upper bound of a spacing chosen on other clips): every c frames
+with the first M kept (c = 1..S; Jumpy's pattern) and Table 1's Constant (the c that put at most M in a
+full clip). Also: the expert's success within the clip (clips / episodes played) and labels per clip.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from datetime import date
+
+import numpy as np
+import torch
+from hydra.utils import instantiate
+
+from common import cpu_model, dataset_config, publish
+from keyin.data.generate import split_seed
+from keyin.data.metaworld import MetaWorldGenerator
+from keyin.decode.baselines import ConstantKeyframes
+from keyin.eval.f1 import column_scores, keyframe_lists
+
+# (speed_min, max_pause, n_future): the released setting first
+GRID = [(0.4, 16, 25), (0.4, 32, 25), (0.4, 48, 31), (0.25, 16, 31), (0.25, 32, 31), (0.15, 32, 41)]
+
+
+def labels_only(generator: MetaWorldGenerator, clips: int) -> tuple[torch.Tensor, torch.Tensor, int]:
+    """(clips, N) future keyframe flags, (clips,) valid future lengths and the episodes played, for
+    the first ``clips`` val clips of ``generator`` (its renderer stubbed: one black pixel per frame)."""
+    seed = split_seed(0, "val")
+    flags, lengths, played = [], [], 0
+    for index in range(clips):
+        arrays, attempts = generator.generate(index, seed)
+        flags.append(torch.from_numpy(arrays["keyframes"][generator.n_cond:]))
+        lengths.append(int(arrays["length"]) - generator.n_cond)
+        played += attempts
+    return torch.stack(flags), torch.tensor(lengths), played
+
+
+def best_pattern(flags: torch.Tensor, lengths: torch.Tensor, offsets: range, n_keyframes: int | None) -> tuple[int, float]:
+    """The spacing c of ``offsets`` whose pattern scores best, and its interior F1."""
+    truth, n_future = keyframe_lists(flags), flags.shape[1]
+    scores = {c: column_scores(ConstantKeyframes(c, n_keyframes)(None, lengths), truth, lengths.tolist(), n_future)["f1_interior"]
+              for c in offsets}
+    best = max(scores, key=scores.get)
+    return best, scores[best]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clips", type=int, default=300)
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    config = dataset_config("metaworld")
+    n_keyframes, max_offset = config.n_keyframes, config.max_offset
+    MetaWorldGenerator.render = lambda self, renderer, data: np.zeros((1, 1, 3), np.uint8)  # labels need no frames
+    rows = ["| speed cap U(s, 1), s | pause (env steps) | n_future | success in the clip | labels / clip | "
+            "every c, first M: best c, F1 | Table 1's Constant: best c, F1 | seconds |", "|---|---|---|---|---|---|---|---|"]
+    for speed_min, max_pause, n_future in GRID:
+        began = time.perf_counter()
+        generator = instantiate(config.generator, image_size=16, speed_min=speed_min, max_pause=max_pause, n_future=n_future)
+        flags, lengths, played = labels_only(generator, args.clips)
+        first_m = best_pattern(flags, lengths, range(1, max_offset + 1), n_keyframes)
+        table = best_pattern(flags, lengths, range(n_future // (n_keyframes + 1) + 1, max_offset + 1), None)
+        rows.append(f"| {speed_min} | {max_pause} | {n_future} | {args.clips / played:.1%} | {flags.sum(1).float().mean():.2f} | "
+                    f"{first_m[0]}, {first_m[1]:.3f} | {table[0]}, {table[1]:.3f} | {time.perf_counter() - began:.0f} |")
+    publish("\n".join([
+        f"## Meta-World's timing levers against a fixed keyframe pattern ({args.clips} val clips per setting)\n",
+        f"- command: `MUJOCO_GL=egl OMP_NUM_THREADS=1 python benchmarks/metaworld_timing.py --clips {args.clips}`",
+        f"- machine: {cpu_model()}, {date.today()}; M = {n_keyframes}, S = {max_offset}; the first row is the released setting\n",
+        *rows,
+    ]), args.out)
+
+
+if __name__ == "__main__":
+    main()
