@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import time
 from datetime import date
+from pathlib import Path
 
 import torch
 from hydra.utils import instantiate
@@ -26,7 +27,7 @@ from keyin.data.metaworld import MetaWorldGenerator
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", type=int, default=100)
-    parser.add_argument("--out", default=None)
+    parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     generator: MetaWorldGenerator = instantiate(dataset_config("metaworld").generator)
     seed = split_seed(0, "val")

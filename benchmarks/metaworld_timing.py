@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import time
 from datetime import date
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -59,7 +60,7 @@ def best_pattern(flags: torch.Tensor, lengths: torch.Tensor, offsets: range, n_k
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", type=int, default=300)
-    parser.add_argument("--out", default=None)
+    parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     config = dataset_config("metaworld")
     n_keyframes, max_offset = config.n_keyframes, config.max_offset
