@@ -117,6 +117,7 @@ def plan(cfg: DictConfig) -> dict:
         planner=cfg.planner.name,
         servo_observe=servo.observe,  # the servo setting (keyin-report names a row of another than the default)
         servo_action_repeat=servo.action_repeat,
+        servo_horizon=servo.horizon,
         dataset=cfg.dataset.name,
         seed=cfg.seed,
         # the seed of the model planned with, where it can differ from the planning seed (keyin, jumpy)

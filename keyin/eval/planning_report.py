@@ -37,7 +37,7 @@ PAPER_TABLE2 = {
 PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
 # The servo settings a job records in its metrics.json (keyin-plan since 0.2), with the defaults a job
 # that records none ran with; a row of another setting is named after it (``jumpy · pixels · env steps``).
-SERVO_DEFAULTS = {"servo_observe": "state", "servo_action_repeat": 2}
+SERVO_DEFAULTS = {"servo_observe": "state", "servo_action_repeat": 2, "servo_horizon": 8}
 CURVE_END = 1.6  # world units: the success curves reach at least this threshold (past the initial distances)
 NOT_RECORDED = "not recorded"
 
@@ -121,12 +121,15 @@ def planner_sort_key(planner: str) -> tuple[int, str]:
 
 
 def servo_setting(job: dict[str, Any]) -> str:
-    """How a job's servo observed and counted time: ``state · servo steps`` (the default),
-    ``pixels · env steps`` (colour segmentation, one action per environment step), ..."""
+    """How a job's servo observed, counted time and planned: ``state · servo steps`` (the default),
+    ``pixels · env steps`` (colour segmentation, one action per environment step), ``state · servo
+    steps · plans of 16 actions`` (a longer plan than the paper's l = 8), ..."""
     observe = job.get("servo_observe", SERVO_DEFAULTS["servo_observe"])
     repeat = int(job.get("servo_action_repeat", SERVO_DEFAULTS["servo_action_repeat"]))
+    horizon = int(job.get("servo_horizon", SERVO_DEFAULTS["servo_horizon"]))
     unit = {1: "env steps", 2: "servo steps"}.get(repeat, f"{repeat} env steps per servo step")
-    return f"{observe} · {unit}"
+    plans = "" if horizon == SERVO_DEFAULTS["servo_horizon"] else f" · plans of {horizon} actions"
+    return f"{observe} · {unit}{plans}"
 
 
 DEFAULT_SETTING = servo_setting({})

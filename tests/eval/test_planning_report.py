@@ -184,6 +184,17 @@ def test_a_servo_setting_is_its_own_row_and_the_sensitivity_table_pairs_the_task
     assert "## Servo settings" in (tmp_path / "out" / "table2.md").read_text()
 
 
+def test_a_longer_servo_plan_is_its_own_setting(tmp_path):
+    write_job(tmp_path, "no_subgoals", 0, [1.0, 1.0, 0.1])  # recorded no horizon: the paper's l = 8
+    write_job(tmp_path, "no_subgoals", 0, [0.1, 1.0, 0.1], servo_horizon=16)
+    write_job(tmp_path, "no_subgoals", 0, [0.1, 0.1, 0.1], servo_horizon=8)  # l = 8 recorded: the default row
+    with pytest.raises(ValueError, match="appears twice"):
+        summarise_planning(collect_planning(tmp_path), 0.66)
+    (tmp_path / "no_subgoals_seed0_8").rename(tmp_path.parent / "elsewhere")  # the recorded l = 8 job
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert [row.planner for row in rows] == ["no_subgoals", "no_subgoals · state · servo steps · plans of 16 actions"]
+
+
 def test_one_model_under_other_planning_seeds_is_its_own_row_and_not_a_servo_setting(tmp_path):
     write_job(tmp_path, "keyin_paper", 0, [0.1, 0.1, 0.1, 0.1], model_seed=0)  # planned with its own model
     write_job(tmp_path, "keyin_paper", 1, [0.1, 1.0, 1.0, 0.1], model_seed=1)
