@@ -9,7 +9,7 @@ one, never a mix, and a killed import leaves only its temporary folder, removed 
 Besides the format's ``frames``, ``length`` and (with labels) ``keyframes``, each clip keeps where
 it came from, so a keyframe maps back to the original video (:func:`clip_origins`):
 
-* ``video`` int32 (n,): the index of its video in the manifest's ``sources`` (id, path, frames, fps);
+* ``video`` int32 (n,): the index of its video in the manifest's ``sources`` (id, path, frames, fps, camera);
 * ``first_frame`` int32 (n,): the original frame at clip position 0;
 * ``frame_stride`` int32 (n,): original frames from one clip position to the next;
 * ``fps`` float32 (n,): the video's frame rate, NaN if unknown.
@@ -83,6 +83,7 @@ class ImportedVideo:
     starts: list[int]  # its windows' first kept frames
     stored_shape: tuple[int, int, int]  # (H, W, C) of its frames as stored, before fitting
     where: str  # how messages name it (:attr:`keyin.data.sources.Video.where`)
+    camera: str | None = None  # the camera read (robomimic, LeRobot), None for a video of its own
 
     def keyframes(self, frame_stride: int) -> list[int]:
         """The labels as kept-frame indices."""
@@ -203,7 +204,8 @@ def read_videos(
             if starts:
                 fps = video.fps or spec.fps
                 videos.append(
-                    ImportedVideo(video.id, video.path, n_frames, fps, frames, labelled, starts, stored_shape, video.where)
+                    ImportedVideo(video.id, video.path, n_frames, fps, frames, labelled, starts, stored_shape, video.where,
+                                  video.camera)
                 )
             else:
                 skipped.append(
@@ -269,11 +271,11 @@ def window_arrays(rows: list[tuple[ImportedVideo, int, int]], spec: ImportSpec) 
 
 
 def sources(videos: list[ImportedVideo], splits: Mapping[str, list[int]]) -> list[dict]:
-    """The manifest's ``sources``: per imported video its id, path, split, frames, fps, clips, labels."""
+    """The manifest's ``sources``: per imported video its id, path, split, frames, fps, camera, clips, labels."""
     split_of = {index: split for split, members in splits.items() for index in members}
     return [
         {"id": video.id, "path": str(video.path.resolve()), "split": split_of[index], "frames": video.n_frames,
-         "fps": video.fps, "clips": len(video.starts), "labels": video.labels}
+         "fps": video.fps, "camera": video.camera, "clips": len(video.starts), "labels": video.labels}
         for index, video in enumerate(videos)
     ]
 

@@ -56,6 +56,7 @@ class Video:
     path: Path
     frames: Iterable[np.ndarray]
     fps: float | None = None
+    camera: str | None = None  # the camera read, for a robomimic demo or a LeRobot episode
 
     @property
     def where(self) -> str:
@@ -261,7 +262,7 @@ def robomimic_videos(path: Path, camera_key: str | None) -> Iterator[Video]:
                     f"{path}: data/{demo}/obs has no '{camera_key}'; set camera_key= to the camera to "
                     f"import ({', '.join(cameras) or 'this demo has no (T, H, W, C) observation'})"
                 )
-            yield Video(f"{path.name}[{demo}]", path, obs[camera_key][()])
+            yield Video(f"{path.name}[{demo}]", path, obs[camera_key][()], camera=camera_key)
 
 
 def lerobot_videos(root: Path, camera_key: str | None, key: str = "source") -> Iterator[Video]:
@@ -282,7 +283,7 @@ def lerobot_videos(root: Path, camera_key: str | None, key: str = "source") -> I
             f"{paths[missing[0]]}; download the dataset's videos/ too, or drop those episodes from meta/episodes.jsonl"
         )
     for index, path in paths.items():
-        yield Video(f"{root.name}[episode_{index}]", path, video_file(path).frames, float(info["fps"]))
+        yield Video(f"{root.name}[episode_{index}]", path, video_file(path).frames, float(info["fps"]), camera)
 
 
 def lerobot_video_path(root: Path, info: dict, camera: str, index: int) -> str:

@@ -121,6 +121,7 @@ def keyframes_record(
         "path": str(video.path.resolve()),
         "frames": video.n_frames,
         "fps": video.fps,
+        "camera": video.camera,
         "stored_size": list(video.stored_shape),
         "frame_stride": frame_stride,
         "first_candidate": n_cond * frame_stride,

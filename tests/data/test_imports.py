@@ -96,7 +96,7 @@ def test_an_npz_of_videos_is_split_by_video_never_by_window(tmp_path):
 def test_a_robomimic_file_imports_each_demo_from_its_camera(tmp_path):
     path = write_robomimic(tmp_path / "demos.hdf5", [frames(20), frames(26), frames(14)], camera_key="eye")
     folder, stats = import_to(tmp_path, path, camera_key="eye", labels=labels_file(tmp_path, {"demos.hdf5[demo_1]": [3]}))
-    assert [s["id"] for s in read_manifest(folder)["sources"]] == [f"demos.hdf5[demo_{i}]" for i in range(3)]
+    assert [(s["id"], s["camera"]) for s in read_manifest(folder)["sources"]] == [(f"demos.hdf5[demo_{i}]", "eye") for i in range(3)]
     read, origins = clips(folder), clip_origins(folder, "train")
     assert len(read) == 2 + 3 + 2
     keyed = [(o.video, o.frame(N_COND + int(p))) for i, o in enumerate(origins) for p in read[i]["keyframes"].nonzero()]
@@ -114,7 +114,7 @@ def test_a_lerobot_folder_imports_each_episode_from_the_camera_asked_for(tmp_pat
     folder, stats = import_to(tmp_path, root, camera_key="observation.images.wrist", labels=labels)
     sources = read_manifest(folder)["sources"]
     assert [s["id"] for s in sources] == [f"pusht[episode_{i}]" for i in range(3)]  # episode 2 is in chunk-001
-    assert all(s["fps"] == 2 * FPS for s in sources)
+    assert all(s["fps"] == 2 * FPS and s["camera"] == "observation.images.wrist" for s in sources)
     read, origins = clips(folder), clip_origins(folder, "train")
     assert len(read) == 2 + 3 + 2 and stats["videos"] == 3
     assert frame_numbers(read[0]["frames"]) == list(range(19, 7, -1))  # the wrist video, frame by frame
@@ -127,6 +127,7 @@ def test_a_one_camera_lerobot_folder_needs_no_camera_key_nor_episodes_jsonl(tmp_
     (root / "meta" / "episodes.jsonl").unlink()  # then info.json's total_episodes lists them
     folder, stats = import_to(tmp_path, root)
     assert [s["id"] for s in read_manifest(folder)["sources"]] == ["solo[episode_0]", "solo[episode_1]"]
+    assert {s["camera"] for s in read_manifest(folder)["sources"]} == {"observation.image"}  # the one it picked
     assert frame_numbers(clips(folder)[0]["frames"]) == list(range(12))
 
 
