@@ -15,9 +15,24 @@ from __future__ import annotations
 import argparse
 from datetime import date
 
+import torch
+
 from common import clip_arguments, cpu_model, publish, split_batch
 from keyin.decode.baselines import ConstantKeyframes
 from keyin.eval.f1 import column_scores, keyframe_lists
+
+
+def pattern_scores(
+    keyframes: torch.Tensor, future_length: torch.Tensor, n_keyframes: int, max_offset: int, first_m: bool
+) -> dict[int, dict[str, float]]:
+    """Each spacing c's scores (keyin.eval.f1.column_scores) against (B, N) labelled ``keyframes``: every c
+    in 1..S with the first M keyframes kept when ``first_m``, else the c that put at most M in a full clip."""
+    n_future = keyframes.shape[1]
+    truth, lengths = keyframe_lists(keyframes), future_length.tolist()
+    smallest = 1 if first_m else n_future // (n_keyframes + 1) + 1
+    cap = n_keyframes if first_m else None
+    return {c: column_scores(ConstantKeyframes(c, cap)(None, future_length), truth, lengths, n_future)
+            for c in range(smallest, max_offset + 1)}
 
 
 def main() -> None:
@@ -26,14 +41,8 @@ def main() -> None:
     parser.add_argument("--first-m", action="store_true", help="every c in 1..S, the first M keyframes kept")
     args = parser.parse_args()
     dataset, batch = split_batch(args.dataset, args.split, args.clips, args.data_dir)
-    truth, lengths = keyframe_lists(batch["keyframes"]), batch["future_length"].tolist()
-    cap = dataset.n_keyframes if args.first_m else None
-    smallest = 1 if args.first_m else dataset.n_future // (dataset.n_keyframes + 1) + 1  # else: ≤ M keyframes in a full clip
-    scores = {
-        offset: column_scores(ConstantKeyframes(offset, cap)(batch["frames"], batch["future_length"]), truth, lengths,
-                              dataset.n_future)
-        for offset in range(smallest, dataset.max_offset + 1)
-    }
+    scores = pattern_scores(batch["keyframes"], batch["future_length"], dataset.n_keyframes, dataset.max_offset,
+                            args.first_m)
     best = max(scores, key=lambda offset: scores[offset]["f1_interior"])
     rows = ["| c | F1 interior | ±1 F1 interior | F1 with ends | keyframes/clip (interior) |", "|---|---|---|---|---|"]
     for offset, s in scores.items():

@@ -21,6 +21,7 @@ import ruptures
 
 from pushing_state_segmentation import N_COND, PRICES, discover, score
 from keyin.data.hdf5 import load_arrays
+from keyin.decode.changepoint import ChangepointKeyframes
 
 N_KEYFRAMES, MAX_OFFSET = 4, 12
 assert N_COND == 1, "discover and score read the clips with pushing's n_cond, which is Meta-World's too"
@@ -28,15 +29,14 @@ PENALTIES = [1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2]  # squared metres per cha
 
 
 def hand_changepoints(arrays: dict[str, np.ndarray], penalty: float) -> list[list[int]]:
-    """PELT (l2) on the hand's velocity: where the hand turns, starts or stops, at most M per clip."""
+    """PELT (l2) on the hand's velocity: where the hand turns, starts or stops, at most M per clip
+    (the detector keyin's change-point rule fits to a frame signal, here to the true hand path)."""
+    finder = ChangepointKeyframes(N_KEYFRAMES, N_COND, penalty, cost="l2")
     found = []
-    for hand, length in zip(arrays["hand"].astype(np.float64), (arrays["length"] - 1).tolist()):
-        if length < 2:
-            found.append([])
-            continue
+    for hand, length in zip(arrays["hand"].astype(np.float64), (arrays["length"] - N_COND).tolist()):
         velocity = np.diff(hand[: length + 1], axis=0)  # (length, 3): row t moves frame t to frame t + 1
-        starts = ruptures.Pelt(model="l2", min_size=1, jump=1).fit(velocity).predict(pen=penalty)[:-1]
-        found.append([b - 1 for b in starts if 0 <= b - 1 < length][:N_KEYFRAMES])  # a new velocity at row b: frame b
+        detector = ruptures.Pelt(model="l2", min_size=1, jump=1).fit(velocity) if length >= 2 else None
+        found.append(finder.positions(detector, length))
     return found
 
 

@@ -25,11 +25,10 @@ import numpy as np
 import torch
 from hydra.utils import instantiate
 
+from choose_constant import pattern_scores
 from common import cpu_model, dataset_config, publish
 from keyin.data.generate import split_seed
 from keyin.data.metaworld import MetaWorldGenerator
-from keyin.decode.baselines import ConstantKeyframes
-from keyin.eval.f1 import column_scores, keyframe_lists
 
 # (speed_min, max_pause, n_future): the released setting first
 GRID = [(0.4, 16, 25), (0.4, 32, 25), (0.4, 48, 31), (0.25, 16, 31), (0.25, 32, 31), (0.15, 32, 41)]
@@ -48,13 +47,10 @@ def labels_only(generator: MetaWorldGenerator, clips: int) -> tuple[torch.Tensor
     return torch.stack(flags), torch.tensor(lengths), played
 
 
-def best_pattern(flags: torch.Tensor, lengths: torch.Tensor, offsets: range, n_keyframes: int | None) -> tuple[int, float]:
-    """The spacing c of ``offsets`` whose pattern scores best, and its interior F1."""
-    truth, n_future = keyframe_lists(flags), flags.shape[1]
-    scores = {c: column_scores(ConstantKeyframes(c, n_keyframes)(None, lengths), truth, lengths.tolist(), n_future)["f1_interior"]
-              for c in offsets}
-    best = max(scores, key=scores.get)
-    return best, scores[best]
+def best_pattern(scores: dict[int, dict[str, float]]) -> tuple[int, float]:
+    """The spacing of :func:`choose_constant.pattern_scores` that scores best, and its interior F1."""
+    best = max(scores, key=lambda c: scores[c]["f1_interior"])
+    return best, scores[best]["f1_interior"]
 
 
 def main() -> None:
@@ -71,8 +67,8 @@ def main() -> None:
         began = time.perf_counter()
         generator = instantiate(config.generator, image_size=16, speed_min=speed_min, max_pause=max_pause, n_future=n_future)
         flags, lengths, played = labels_only(generator, args.clips)
-        first_m = best_pattern(flags, lengths, range(1, max_offset + 1), n_keyframes)
-        table = best_pattern(flags, lengths, range(n_future // (n_keyframes + 1) + 1, max_offset + 1), None)
+        first_m = best_pattern(pattern_scores(flags, lengths, n_keyframes, max_offset, first_m=True))
+        table = best_pattern(pattern_scores(flags, lengths, n_keyframes, max_offset, first_m=False))
         rows.append(f"| {speed_min} | {max_pause} | {n_future} | {args.clips / played:.1%} | {flags.sum(1).float().mean():.2f} | "
                     f"{first_m[0]}, {first_m[1]:.3f} | {table[0]}, {table[1]:.3f} | {time.perf_counter() - began:.0f} |")
     publish("\n".join([

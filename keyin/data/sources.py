@@ -315,19 +315,23 @@ def lerobot_info(root: Path) -> dict:
     missing = [key for key in LEROBOT_KEYS if key not in info]
     if missing:
         raise DatasetFormatError(f"{path} has no {', '.join(missing)}; a LeRobot v2 info.json holds {', '.join(LEROBOT_KEYS)}")
-    counts = {"chunks_size": 1, "total_episodes": 0}
-    malformed = [
-        *(f"{name}={info[name]!r} (a whole number >= {least})" for name, least in counts.items()
-          if name in info and not (isinstance(info[name], int) and not isinstance(info[name], bool) and info[name] >= least)),
-        *([f"fps={info['fps']!r} (a number > 0)"]
-          if not (isinstance(info["fps"], (int, float)) and not isinstance(info["fps"], bool) and info["fps"] > 0) else []),
-        *([f"video_path={info['video_path']!r} (a path template)"] if not isinstance(info["video_path"], str) else []),
-        *([f"features of type {type(info['features']).__name__} (an object of feature name: description)"]
-          if not isinstance(info["features"], dict) else []),
-    ]
+    malformed = [f"{name}={info[name]!r} (a whole number >= {least})"
+                 for name, least in (("chunks_size", 1), ("total_episodes", 0))
+                 if name in info and not (is_number(info[name], int) and info[name] >= least)]
+    if not (is_number(info["fps"], (int, float)) and info["fps"] > 0):
+        malformed.append(f"fps={info['fps']!r} (a number > 0)")
+    if not isinstance(info["video_path"], str):
+        malformed.append(f"video_path={info['video_path']!r} (a path template)")
+    if not isinstance(info["features"], dict):
+        malformed.append(f"features of type {type(info['features']).__name__} (an object of feature name: description)")
     if malformed:
         raise DatasetFormatError(f"{path} holds {'; '.join(malformed)}; fix the file (LeRobot v2 writes these fields)")
     return info
+
+
+def is_number(value: object, kinds: type | tuple[type, ...]) -> bool:
+    """``value`` is of ``kinds`` and not a bool (JSON's true is no count)."""
+    return isinstance(value, kinds) and not isinstance(value, bool)
 
 
 def lerobot_camera(root: Path, info: dict, camera_key: str | None) -> str:
