@@ -47,6 +47,12 @@ def labels_only(generator: MetaWorldGenerator, clips: int) -> tuple[torch.Tensor
     return torch.stack(flags), torch.tensor(lengths), played
 
 
+def setting(text: str) -> tuple[float, int, int]:
+    """``"0.4,48,31"`` -> (speed_min, max_pause, n_future)."""
+    speed_min, max_pause, n_future = text.split(",")
+    return float(speed_min), int(max_pause), int(n_future)
+
+
 def best_pattern(scores: dict[int, dict[str, float]]) -> tuple[int, float]:
     """The spacing of :func:`choose_constant.pattern_scores` that scores best, and its interior F1."""
     best = max(scores, key=lambda c: scores[c]["f1_interior"])
@@ -57,13 +63,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", type=int, default=300)
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--grid", nargs="+", type=setting, default=GRID, metavar="S,PAUSE,N",
+                        help="settings speed_min,max_pause,n_future to play (default: the module's GRID)")
     args = parser.parse_args()
     config = dataset_config("metaworld")
     n_keyframes, max_offset = config.n_keyframes, config.max_offset
     MetaWorldGenerator.render = lambda self, renderer, data: np.zeros((1, 1, 3), np.uint8)  # labels need no frames
     rows = ["| speed cap U(s, 1), s | pause (env steps) | n_future | success in the clip | labels / clip | "
             "every c, first M: best c, F1 | Table 1's Constant: best c, F1 | seconds |", "|---|---|---|---|---|---|---|---|"]
-    for speed_min, max_pause, n_future in GRID:
+    for speed_min, max_pause, n_future in args.grid:
         began = time.perf_counter()
         generator = instantiate(config.generator, image_size=16, speed_min=speed_min, max_pause=max_pause, n_future=n_future)
         flags, lengths, played = labels_only(generator, args.clips)
@@ -73,8 +81,10 @@ def main() -> None:
                     f"{first_m[0]}, {first_m[1]:.3f} | {table[0]}, {table[1]:.3f} | {time.perf_counter() - began:.0f} |")
     publish("\n".join([
         f"## Meta-World's timing levers against a fixed keyframe pattern ({args.clips} val clips per setting)\n",
-        f"- command: `MUJOCO_GL=egl OMP_NUM_THREADS=1 python benchmarks/metaworld_timing.py --clips {args.clips}`",
-        f"- machine: {cpu_model()}, {date.today()}; M = {n_keyframes}, S = {max_offset}; the first row is the released setting\n",
+        f"- command: `MUJOCO_GL=egl OMP_NUM_THREADS=1 python benchmarks/metaworld_timing.py --clips {args.clips}"
+        + ("" if args.grid == GRID else " --grid " + " ".join(",".join(map(str, row)) for row in args.grid)) + "`",
+        f"- machine: {cpu_model()}, {date.today()}; M = {n_keyframes}, S = {max_offset}"
+        + ("; the first row is the released setting" if args.grid == GRID else "") + "\n",
         *rows,
     ]), args.out)
 

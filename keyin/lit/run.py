@@ -42,6 +42,19 @@ class FiniteLoss(L.Callback):
             )
 
 
+class FinalCheckpoint(L.Callback):
+    """Save the full final state (optimizer too) to ``path`` when training ends, whatever the checkpoint
+    cadence. Saved inside the fit, while its data loader still runs: saved after ``fit`` returns, the
+    loader's state would be read from a new worker started only for it, whose shutdown then waits
+    5 s (one per stage and worker; docs/decisions.md "The final checkpoint inside the fit")."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def on_train_end(self, trainer: L.Trainer, module: L.LightningModule) -> None:
+        trainer.save_checkpoint(self.path, weights_only=False)
+
+
 FRAME_NETWORKS = ("encoder", "decoder", "interpolator")  # what the discovery rules call, frame by frame
 
 
@@ -95,7 +108,8 @@ def fit_stage(
         val_check_interval=val_every,
         check_val_every_n_epoch=None,
         logger=logger,
-        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures")],
+        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures"),
+                   FinalCheckpoint(last)],
         default_root_dir=str(run_dir),
         plugins=[AtomicCheckpointIO()],
     )
@@ -115,5 +129,4 @@ def fit_stage(
             log.info("%s stay frozen in eval mode (by design)", frozen)
         # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
         trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
-    trainer.save_checkpoint(last, weights_only=False)  # the full final state (optimizer too), whatever the cadence
     return last
