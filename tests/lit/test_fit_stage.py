@@ -1,0 +1,51 @@
+"""fit_stage's final checkpoint: the full state at the last step, saved while the fit's own loader runs."""
+
+import lightning as L
+import torch
+from torch.utils.data import Dataset
+from torchdata.stateful_dataloader import StatefulDataLoader
+
+from keyin.data.datamodule import ClipDataModule
+from keyin.lit.checkpoints import load_checkpoint
+from keyin.lit.run import fit_stage
+
+
+class Numbers(Dataset):
+    def __len__(self) -> int:
+        return 40
+
+    def __getitem__(self, index: int) -> torch.Tensor:
+        return torch.tensor([float(index)])
+
+
+class Line(L.LightningModule):
+    stage = "line"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.weight = torch.nn.Parameter(torch.zeros(1))
+
+    def training_step(self, batch: torch.Tensor, batch_idx: int) -> torch.Tensor:
+        return ((self.weight - batch) ** 2).mean()
+
+    def validation_step(self, batch: torch.Tensor, batch_idx: int) -> None:
+        self.log("val_loss", ((self.weight - batch) ** 2).mean())
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        return torch.optim.Adam(self.parameters(), lr=0.1)
+
+
+def test_the_last_checkpoint_holds_the_final_step_and_starts_no_extra_loader_worker(tmp_path, monkeypatch):
+    started = []
+    get_iterator = StatefulDataLoader._get_iterator
+    monkeypatch.setattr(StatefulDataLoader, "_get_iterator", lambda self: started.append(self) or get_iterator(self))
+    torch.manual_seed(0)
+    data = ClipDataModule(Numbers(), Numbers(), batch_size=4, num_workers=1)
+    trainer_kwargs = dict(accelerator="cpu", devices=1, enable_progress_bar=False, enable_model_summary=False,
+                          num_sanity_val_steps=0)
+    last = fit_stage(Line(), data, tmp_path, max_steps=5, val_every=4, checkpoint_every=4,
+                     trainer_kwargs=trainer_kwargs, logger=False, config={})
+    saved = load_checkpoint(last, "line")
+    assert saved["global_step"] == 5 and saved["optimizer_states"]  # the last step, off the cadence of 4
+    assert len(started) == 1  # the fit's loader only: the final state is read from its worker
+    assert saved["loops"]["fit_loop"]["state_dict"]["combined_loader"][0]["_snapshot"]["_snapshot_step"] == 5  # where it stopped
