@@ -23,16 +23,15 @@ def test_set(tmp_path_factory):
     return root
 
 
-@pytest.mark.parametrize("launcher", [
-    ("hydra/launcher=joblib", "hydra.launcher.n_jobs=2"),
-    ("hydra/launcher=local",),
-])
-def test_a_sweep_runs_every_job_through_the_launcher(test_set, launcher):
+@pytest.mark.parametrize(("launcher", "seeds"), [
+    (("hydra/launcher=joblib", "hydra.launcher.n_jobs=2"), (0, 1)),
+    (("hydra/launcher=local",), (0,)),  # submitit starts a process per job: two jobs show it, each costs an import of torch
+], ids=["joblib", "submitit-local"])
+def test_a_sweep_runs_every_job_through_the_launcher(test_set, launcher, seeds):
     sweep = f"sweep_{launcher[0].split('=')[1]}"
-    result = run_process("train", "-m", "model=random,constant", "seed=0,1", *launcher, f"hydra.sweep.dir={sweep}",
-                         cwd=test_set)
+    result = run_process("train", "-m", "model=random,constant", f"seed={','.join(map(str, seeds))}", *launcher,
+                         f"hydra.sweep.dir={sweep}", cwd=test_set)
     assert result.returncode == 0, result.stderr[-3000:]
     jobs = sorted((test_set / sweep).glob("*/metrics.json"))
-    assert len(jobs) == 4
     rows = {(m["method"], m["seed"]) for m in (json.loads(path.read_text()) for path in jobs)}
-    assert rows == {(method, seed) for method in ("random", "constant") for seed in (0, 1)}
+    assert len(jobs) == 2 * len(seeds) and rows == {(method, seed) for method in ("random", "constant") for seed in seeds}
