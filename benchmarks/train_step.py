@@ -75,20 +75,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scale", default="cpu")
     parser.add_argument("--dataset", default="brownian")
+    parser.add_argument("--model", default=None, help="model= override, e.g. keyin_plus (its teacher included)")
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--device", default="cpu", help="cpu or cuda")
     args = parser.parse_args()
     device = torch.device(args.device)
     torch.manual_seed(0)
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
-        cfg = compose("train", overrides=[f"scale={args.scale}", f"dataset={args.dataset}"])
+        overrides = [f"scale={args.scale}", f"dataset={args.dataset}"] + ([f"model={args.model}"] if args.model else [])
+        cfg = compose("train", overrides=overrides)
     stage1 = instantiate(cfg.model.interpolator)
     stage2 = instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams))
     stage2.load_stage1(stage1.state_dict())
     stage1.to(device)
     stage2.to(device)
-    print(f"## Training-step time, scale={args.scale}, dataset={args.dataset}\n")
-    print(f"- command: `python benchmarks/train_step.py --scale {args.scale} --dataset {args.dataset} "
+    model = f" --model {args.model}" if args.model else ""
+    print(f"## Training-step time, scale={args.scale}, dataset={args.dataset}, model={cfg.model.name}\n")
+    print(f"- command: `python benchmarks/train_step.py --scale {args.scale} --dataset {args.dataset}{model} "
           f"--steps {args.steps} --device {args.device}`")
     gpu = f", {torch.cuda.get_device_name(device)}" if device.type == "cuda" else ""
     print(f"- machine: {platform.processor() or platform.machine()}{gpu}, {torch.get_num_threads()} threads, "
