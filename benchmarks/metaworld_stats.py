@@ -26,13 +26,14 @@ from keyin.data.hdf5 import load_arrays, split_files
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--split", default="val")
+    parser.add_argument("--dataset", default="metaworld", help="metaworld or metaworld_v2")
     parser.add_argument("--data-dir", default="data")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--figure", type=Path)
     args = parser.parse_args()
-    config = dataset_config("metaworld")
+    config = dataset_config(args.dataset)
     tasks = list(config.generator.tasks)
-    shards = [load_arrays(path) for path in split_files(Path(args.data_dir) / "metaworld", args.split)]
+    shards = [load_arrays(path) for path in split_files(Path(args.data_dir) / args.dataset, args.split)]
     arrays = {key: np.concatenate([shard[key] for shard in shards]) for key in ("keyframes", "length", "task")}
     gaps_by_task, counts, lengths = collections.defaultdict(list), collections.Counter(), collections.defaultdict(list)
     for keyframes, valid, task in zip(arrays["keyframes"], arrays["length"], arrays["task"]):
@@ -43,8 +44,9 @@ def main() -> None:
     every_gap = np.concatenate([g for rows in gaps_by_task.values() for g in rows])
     lines = [
         f"## Meta-World clips ({args.split}, {len(arrays['task'])} clips)\n",
-        f"- command: `python benchmarks/metaworld_stats.py --split {args.split}`",
-        f"- machine: {cpu_model()}, {date.today()}; conf/dataset/metaworld.yaml (frame_skip "
+        f"- command: `python benchmarks/metaworld_stats.py --split {args.split}"
+        + ("" if args.dataset == "metaworld" else f" --dataset {args.dataset}") + "`",
+        f"- machine: {cpu_model()}, {date.today()}; conf/dataset/{args.dataset}.yaml (frame_skip "
         f"{config.generator.frame_skip}, L = {config.n_cond + config.n_future})",
         f"- labels per clip: {', '.join(f'{k}: {v}' for k, v in sorted(counts.items()))}",
         f"- gaps between labels (saved frames, the first from frame 0): median {np.median(every_gap):.0f}, "
