@@ -89,7 +89,7 @@ FIGURE = ["figure=fig5", "ckpt=pretrained:brownian"]
 # id, command, overrides ({files} is the fixture's folder), the problem named, the fix named.
 BAD_INPUTS = [
     ("unknown-option", "eval", ["model=random", "dataset=nope"],
-     "Could not find 'dataset/nope'", "Available options in 'dataset': brownian, custom, metaworld, pushing"),
+     "Could not find 'dataset/nope'", "Available options in 'dataset': brownian, custom, metaworld, metaworld_v2, pushing"),
     ("key-typo", "eval", ["model=random", "dataset.n_futur=3"],
      "unknown config key dataset.n_futur", "did you mean dataset.n_future?"),
     ("key-typo-top-level", "train", ["seeed=3"], "unknown config key seeed", "did you mean seed?"),
