@@ -24,7 +24,7 @@ def smoke_checkpoint(tmp_path_factory):
     root = tmp_path_factory.mktemp("pretrained")
     assert run("generate", "splits={test: 4}", "progress=false", cwd=root).returncode == 0
     result = run("train", "experiment=brownian_keyin", "scale=smoke", *OLD_SMOKE_KEYIN, "logger=none",
-                 "trainer.enable_progress_bar=false", "hydra.run.dir=run", cwd=root)
+                 "trainer.enable_progress_bar=false", "evaluate=false", "num_workers=0", "hydra.run.dir=run", cwd=root)
     assert result.returncode == 0, result.stderr
     return root, root / "run" / "checkpoints" / "keyframes" / "last.ckpt"
 

@@ -10,7 +10,7 @@ from keyin.cli.app import CONFIG_MODULE
 from tests.cli.runner import run
 
 TRAINED = ("keyin_plus", "jumpy", "static", "surprise")
-SWEEP = ("-m", "experiment=pushing_table1", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
+SWEEP = ("-m", "experiment=pushing_table1", "scale=smoke", "logger=none", "num_workers=0", "trainer.enable_progress_bar=false",
          f"model={','.join(TRAINED)},constant", "seed=0")
 
 

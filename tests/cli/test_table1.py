@@ -7,7 +7,7 @@ import pytest
 from keyin.cli import report
 from tests.cli.runner import run
 
-SWEEP = ("-m", "experiment=brownian_table1", "scale=smoke", "logger=none", "trainer.enable_progress_bar=false",
+SWEEP = ("-m", "experiment=brownian_table1", "scale=smoke", "logger=none", "num_workers=0", "trainer.enable_progress_bar=false",
          "model=static,surprise,random", "seed=0")
 
 

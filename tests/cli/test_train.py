@@ -19,7 +19,7 @@ from tests.faults import fill_disk_on
 
 
 # keyin 0.1's `keyin-train experiment=brownian_keyin scale=smoke`, in today's names.
-KEYIN_SMOKE = ("experiment=brownian_keyin", "scale=smoke", *OLD_SMOKE_KEYIN, "logger=none",
+KEYIN_SMOKE = ("experiment=brownian_keyin", "scale=smoke", *OLD_SMOKE_KEYIN, "logger=none", "num_workers=0",
                "trainer.enable_progress_bar=false")
 REFERENCE = json.loads((Path(__file__).parents[1] / "reference" / "smoke_keyin_metrics.json").read_text())
 
