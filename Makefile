@@ -40,7 +40,7 @@ demo-keyin: $(STAMP)
 	$(BIN)/keyin-train experiment=brownian_keyin
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n auto --dist loadfile --durations=30   # one worker per core, a test file per worker; the 30 slowest tests (issue 44)
+	OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n auto --dist loadfile --durations=30   # one worker per core, one torch thread per worker (two threads per worker on 2 cores took twice the time), a test file per worker; the 30 slowest tests (issue 44)
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -m slow
