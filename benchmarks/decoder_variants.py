@@ -95,7 +95,7 @@ def main() -> None:
         rows.append(f"| channels_last | {seconds:.3f} | {1000 * seconds / args.frames:.3f} | {eager / seconds:.2f}x | {difference:.2g} |")
     publish("\n".join([
         f"## The frame decoder's variants on {args.frames} embeddings ({args.ckpt})\n",
-        f"- command: `python benchmarks/decoder_variants.py --ckpt {args.ckpt} --frames {args.frames} --threads {args.threads}`",
+        f"- command: `python benchmarks/decoder_variants.py --ckpt {args.ckpt} --frames {args.frames} --threads {args.threads} --repeats {args.repeats}`",
         f"- machine: {cpu_model()}, {args.threads} thread(s), torch {torch.__version__}, {date.today()}\n",
         *rows,
     ]), args.out)
