@@ -13,7 +13,9 @@ the rule keyin-discover's ``auto`` falls back to) through
 ``keyin.pipelines.discover.discover_videos``, as keyin-discover does; the parts are timed by wrapping
 the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
 ``KEYIN.keyframes`` (encoder and posterior, run by the rule and by the score), the interpolator's
-segment costs, the DP, and the files (JSON and pictures).
+segment costs (per window, or once per video for all its windows: ``video_costs``, keyin-discover's
+path for map and segmentation), the DP, and the files (JSON and pictures). ``--per-window`` also runs
+map with each window computing its own segment costs (the path before the windows shared them).
 """
 
 from __future__ import annotations
@@ -44,8 +46,11 @@ from keyin.cli.app import CONFIG_MODULE
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
+from keyin.decode.rules import SEGMENT_COST_RULES
 from keyin.eval.f1 import keyframe_scores
+from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module
+from keyin.losses.image import plain_bce
 from keyin.models.keyin import KEYIN
 from keyin.pipelines.discover import discover_videos
 from keyin.pretrained import is_pretrained
@@ -53,6 +58,7 @@ from keyin.pretrained import is_pretrained
 PARTS = {  # part -> (owner, attribute) of the function timed
     "encoder + posterior": (KEYIN, "keyframes"),
     "segment costs": (keyin.decode.rules, "interpolation_costs"),
+    "video segment costs": (KeyframeModule, "video_costs"),
     "DP": (keyin.decode.segmentation, "best_segmentation"),
     "files": (keyin.pipelines.discover, "write_video_folder"),
 }
@@ -116,8 +122,9 @@ def long_clip(folder: Path, n_frames: int, kind: str, data_dir: Path) -> tuple[P
     return folder / "clip.npy", folder / "clip.mp4", labels
 
 
-def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int], out: Path) -> dict:
-    """One model and rule through keyin-discover's path; its times, frames per second and F1 on the clip."""
+def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int], out: Path, shared: bool = True) -> dict:
+    """One model and rule through keyin-discover's path (``shared``: the segment costs once per video,
+    as keyin-discover computes them); its times, frames per second and F1 on the clip."""
     sizes = module.hparams.stage1
     n_cond, n_future = sizes["n_cond"], sizes["n_future"]
     spec = ImportSpec(image_size=sizes["image_size"], channels=sizes["channels"], n_cond=n_cond, n_future=n_future,
@@ -127,17 +134,21 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
     decode = time.perf_counter() - started
     videos, _, _ = read_videos(clip, spec, None, None, progress=False)
     discoverer = functools.partial(module.discover, discovery=rule, keyframe_cost="knee")
+    shared = shared and rule in SEGMENT_COST_RULES and plain_bce(sizes)  # else each window computes its own
+    folder = out / label / f"{rule}-{shared}"
     with timed_parts() as parts:
+        video_costs = module.video_costs if shared else None  # the timed method
         started = time.perf_counter()
-        summary = discover_videos(videos, discoverer, module.keyframe_probabilities, out / label / rule, {}, n_cond,
-                                  n_future, 1, n_future // 2, progress=False)
+        summary = discover_videos(videos, discoverer, module.keyframe_probabilities, folder, {}, n_cond,
+                                  n_future, 1, n_future // 2, progress=False, video_costs=video_costs)
         total = time.perf_counter() - started
-    record = json.loads((out / label / rule / summary["videos"]["clip.npy"]["folder"] / "keyframes.json").read_text())
+    record = json.loads((folder / summary["videos"]["clip.npy"]["folder"] / "keyframes.json").read_text())
     found = [keyframe["frame"] for keyframe in record["keyframes"]]
     inside = [t for t in turns if n_cond <= t < len(videos[0].frames) - 1]
     scores = keyframe_scores([found], [inside], len(videos[0].frames))
     parts = dict(parts, decode=decode, rest=total - sum(parts.values()))
-    return dict(label=f"{label}, {rule}", frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
+    name = f"{label}, {rule}" + (" per window" if rule in SEGMENT_COST_RULES and not shared else "")
+    return dict(label=name, keyframes=found, frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
                 found=len(found), turns=len(inside), f1=scores["f1"], f1_tol1=scores["f1_tol1"])
 
 
@@ -158,6 +169,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=600, help="frames of the long clip")
     parser.add_argument("--ckpt", nargs="*", default=[], help="also trained stage-2 checkpoints (pretrained:<name> too)")
     parser.add_argument("--rules", nargs="+", default=["map"], help="the rules each model runs (map, boundaries, offsets)")
+    parser.add_argument("--per-window", action="store_true",
+                        help="also run map with each window's own segment costs, and check the keyframes are the same")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--clip", choices=("brownian", "pushing"), default="brownian",
                         help="the long clip: one Brownian motion, or pushing test demos back to back (needs data/pushing)")
@@ -174,12 +187,17 @@ def main() -> None:
         models.append((f"trained {config['model']['name']} ({name})", module, config["dataset"]["name"] == args.clip))
     with tempfile.TemporaryDirectory() as tmp:
         clip, movie, turns = long_clip(Path(tmp), args.frames, args.clip, args.data_dir)
-        results = [(run(module, label, rule, clip, movie, turns, Path(tmp)), scored)
+        results = [(run(module, label, rule, clip, movie, turns, Path(tmp), shared), scored)
                    for label, module, scored in models for rule in args.rules
+                   for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and plain_bce(module.hparams.stage1) else (True,))
                    if rule != "boundaries" or module.hparams.offset_evidence]
+    for (shared, _), (alone, _) in zip(results, results[1:]):
+        if alone["label"] == shared["label"] + " per window" and alone["keyframes"] != shared["keyframes"]:
+            raise SystemExit(f"{shared['label']}: the shared segment costs found other keyframes than the per-window ones")
     command = " ".join(["python benchmarks/discover_speed.py", f"--frames {args.frames}", f"--threads {args.threads}",
                         f"--clip {args.clip}"]
-                       + ([f"--ckpt {' '.join(args.ckpt)}"] if args.ckpt else []) + [f"--rules {' '.join(args.rules)}"])
+                       + ([f"--ckpt {' '.join(args.ckpt)}"] if args.ckpt else []) + [f"--rules {' '.join(args.rules)}"]
+                       + (["--per-window"] if args.per_window else []))
     report = "\n".join([
         f"## keyin-discover throughput on a {args.frames}-frame {args.clip} clip\n",
         f"- command: `PYTHONPATH=. {command}`",
@@ -187,18 +205,20 @@ def main() -> None:
         f"{torch.__version__}, {date.today().isoformat()}",
         *([f"- note: {args.note}"] if args.note else []),
         "- path: keyin.pipelines.discover.discover_videos with each rule (map with the label-free knee), windows every n_future // 2 "
-        "kept frames (each frame in about two windows), batches of 32 windows, frame stride 1",
+        "kept frames (each frame in about two windows), batches of 32 windows, frame stride 1; map's segment costs "
+        "computed once per video and shared by its windows unless marked *per window*",
         "",
         "| model | kept frames / windows | frames/s (model) | frames/s (all) | decode | encoder + posterior | "
-        "segment costs | DP | files | rest | F1 / ±1 F1 of the merged keyframes |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "segment costs | video segment costs | DP | files | rest | F1 / ±1 F1 of the merged keyframes |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
         *(row(result, scored) for result, scored in results),
         "",
         "Parts in milliseconds per kept frame. *frames/s (model)*: kept frames over the time from the windows to the "
         "merged keyframes (files excluded); *all*: over decoding, that and writing the JSON and pictures. *decode*: "
         "PyAV decoding of the clip as an mp4 and fitting its frames to the model's size (the discovery itself reads "
         "the lossless .npy of the same clip); *encoder + posterior*: `KEYIN.keyframes`, run once by the rule and once "
-        "by the score; *rest*: cutting windows, the merge, Python.",
+        "by the score; *segment costs*: per window (map *per window*); *video segment costs*: once per video, shared by its "
+        "windows (keyin-discover's path; the embeddings of its frames included); *rest*: cutting windows, the merge, Python.",
     ])
     publish(report, args.out)
 

@@ -16,7 +16,7 @@ from keyin.cli.checks import optional_name, require_int_at_least, require_positi
 from keyin.data.frames import fit_note
 from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
 from keyin.data.labels import check_known, read_labels
-from keyin.decode.rules import KEYIN_RULES
+from keyin.decode.rules import KEYIN_RULES, SEGMENT_COST_RULES
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
@@ -129,6 +129,7 @@ def discover(cfg: DictConfig) -> dict:
     summary = discover_videos(
         videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
         stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress, pictures=bool(cfg.pictures),
+        video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
     write_metrics(summary, run_dir())

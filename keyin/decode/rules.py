@@ -21,6 +21,7 @@ from keyin.models.keyin import KEYIN
 
 KEYIN_RULES = ("offsets", "boundaries", "map", "segmentation")
 VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
+SEGMENT_COST_RULES = ("map", "segmentation")  # the rules that read the interpolation BCE of every segment
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
 # posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every candidate segment's
 # frames (~16 ms; benchmarks/results/discover_speed.md).
@@ -82,6 +83,7 @@ def map_keyframes(
     scores: Tensor | None = None,
     boundary_weight: float = 0.0,
     weights: Tensor | None = None,
+    costs: Tensor | None = None,
 ) -> list[list[int]]:
     """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
     optionally, the keyframe predictor's boundary scores as a prior.
@@ -94,6 +96,8 @@ def map_keyframes(
         lengths: (B,) valid future frames.
         scores: (B, N) boundary logits, or None for the interpolation cost alone.
         weights: (B, N, D) pixel weights of the frames, None for the plain BCE.
+        costs: (B, N, S) the clips' interpolation BCE if already known (windows of one video share
+            them: :func:`keyin.decode.segment_costs.window_costs`), else None.
     Returns:
         Per clip, the interior keyframe positions.
     """
@@ -101,13 +105,16 @@ def map_keyframes(
 
     def segment_costs(rows: Tensor, length: int) -> Tensor:
         rows = rows.to(boundary_emb.device)
-        costs = interpolation_costs(
-            interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
-            None if weights is None else weights[rows, :length],
-        )
+        if costs is None:
+            bce = interpolation_costs(
+                interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
+                None if weights is None else weights[rows, :length],
+            )
+        else:
+            bce = costs[rows.to(costs.device), :length]
         if scores is not None and boundary_weight:
-            costs = costs + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset)
-        return costs  # best_segmentation moves it to the CPU
+            bce = bce + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset).to(bce.device)
+        return bce  # best_segmentation moves it to the CPU
 
     return decode_by_length(segment_costs, lengths.cpu(), n_keyframes, max_offset, keyframe_cost)
 
@@ -155,6 +162,7 @@ def keyin_keyframes(
     keyframe_cost: KeyframeCost = 0.0,
     boundary_weight: float = 0.0,
     pixel_weights: Tensor | None = None,
+    costs: Tensor | None = None,
 ) -> list[list[int]]:
     """KEYIN's keyframes of clips, in posterior mode with the posterior mean, by one of its rules.
 
@@ -170,6 +178,7 @@ def keyin_keyframes(
             ``boundary_weight`` times the boundary scores where there are any) or "segmentation"
             ("map" without stage 2's boundary scores: stage 1's exact segmentation at the same price).
         pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
+        costs: (B, N, S) that BCE of every segment if already known (see :func:`map_keyframes`).
     Returns:
         Per clip, the keyframe positions inside its valid frames; "boundaries" and "map" add the
         end of a sequence that stops inside the window (:func:`with_sequence_ends`).
@@ -190,6 +199,7 @@ def keyin_keyframes(
             model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
             future_length, model.predictor.n_keyframes, keyframe_cost,
             None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
+            costs=costs,
         )
     return with_sequence_ends(interior, lengths, n_future)
 

@@ -14,9 +14,11 @@ from torch import Tensor
 from keyin.decode.segmentation import segment_starts_offsets
 
 
-def _all_segments(batch: int, n_future: int, max_offset: int) -> tuple[Tensor, Tensor, Tensor]:
-    """clip, start, offset (R,) of every in-clip segment of every clip."""
+def _all_segments(batch: int, n_future: int, max_offset: int, n_starts: int | None = None) -> tuple[Tensor, Tensor, Tensor]:
+    """clip, start, offset (R,) of every in-clip segment of every clip (starting before ``n_starts``)."""
     start, offset = segment_starts_offsets(n_future, max_offset)
+    if n_starts is not None:
+        start, offset = start[start < n_starts], offset[start < n_starts]
     clip = torch.arange(batch).repeat_interleave(len(start))
     return clip, start.repeat(batch), offset.repeat(batch)
 
@@ -43,6 +45,7 @@ def interpolation_costs(
     frames: Tensor,
     weights: Tensor | None = None,
     chunk: int = 1024,
+    n_starts: int | None = None,
 ) -> Tensor:
     """Summed pixel BCE of interpolating every in-clip segment between true boundary embeddings.
 
@@ -53,13 +56,15 @@ def interpolation_costs(
         frames: (B, N, D) the future frames in [0, 1], flattened.
         weights: (B, N, D) their pixel weights (keyin/losses/image.py), None for the plain BCE.
         chunk: segments per interpolator/decoder call.
+        n_starts: only the segments starting at the first ``n_starts`` extended indices (the others
+            stay ``inf``); None: all.
     Returns:
         (B, N, S) costs, ``inf`` where the segment leaves the clip.
     """
     batch, n_ext, _ = boundary_emb.shape
     n_future, max_offset, device = n_ext - 1, interpolator.max_offset, boundary_emb.device
     costs = torch.full((batch, n_future, max_offset), float("inf"), device=device)
-    clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset))
+    clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset, n_starts))
     for first in range(0, len(clip), chunk):
         c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
         predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
@@ -71,6 +76,54 @@ def interpolation_costs(
         bce = F.binary_cross_entropy_with_logits(logits, targets, pixel_weights, reduction="none").sum(1)
         costs[c, a, o - 1] = bce.new_zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
     return costs
+
+
+@torch.no_grad()
+def video_interpolation_costs(
+    interpolator: torch.nn.Module, decoder: torch.nn.Module, embeddings: Tensor, frames: Tensor, block: int = 256
+) -> Tensor:
+    """:func:`interpolation_costs` of every segment of a whole video, for windows to share.
+
+    A segment's cost reads only its two boundary embeddings and the frames between (plain BCE: no
+    window-relative pixel weights), so a window's costs are rows of these (:func:`window_costs`) and
+    overlapping windows need not compute them twice. Computed ``block`` starts at a time.
+
+    Args:
+        embeddings: (T, E) the encoder's embedding of every kept frame.
+        frames: (T, D) those frames in [0, 1], flattened.
+    Returns:
+        (T - 1, S) the cost of the segment from frame ``t`` to frame ``t + o + 1`` at ``[t, o]``,
+        ``inf`` where it leaves the video.
+    """
+    n_frames, max_offset = len(embeddings), interpolator.max_offset
+    costs = []
+    for first in range(0, n_frames - 1, block):
+        last = min(first + block + max_offset, n_frames)  # the block's starts and the frames they reach
+        part = interpolation_costs(
+            interpolator, decoder, embeddings[None, first:last], frames[None, first + 1 : last], n_starts=block
+        )
+        costs.append(part[0, :block])
+    return torch.cat(costs)
+
+
+def window_costs(video_costs: Tensor, firsts: Tensor, lengths: Tensor, n_future: int) -> Tensor:
+    """Windows' segment costs cut from their video's (:func:`video_interpolation_costs`).
+
+    Args:
+        video_costs: (T - 1, S).
+        firsts: (B,) the video frame at each window's extended index 0 (K^0, its last conditioning frame).
+        lengths: (B,) each window's valid future frames.
+        n_future: N.
+    Returns:
+        (B, N, S) as :func:`interpolation_costs` of the windows, ``inf`` where a segment leaves a
+        window's valid frames.
+    """
+    (n_starts, max_offset), device = video_costs.shape, video_costs.device
+    steps = torch.arange(n_future, device=device)
+    rows = firsts.to(device)[:, None] + steps  # (B, N)
+    costs = video_costs[rows.clamp(max=n_starts - 1)]  # (B, N, S)
+    end = steps[None, :, None] + torch.arange(1, max_offset + 1, device=device)  # (1, N, S): start + offset
+    return costs.masked_fill(end > lengths.to(device)[:, None, None], float("inf"))
 
 
 @torch.no_grad()

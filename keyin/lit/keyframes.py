@@ -15,12 +15,13 @@ import lightning as L
 import torch
 
 from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframe_probabilities, keyin_keyframes
+from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KNEE, KeyframeCost
 from keyin.decode.teacher import teacher_loss
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.legacy import upgrade_state_dict
 from keyin.lit.modes import evaluating
-from keyin.losses.image import future_pixel_weights, model_pixel_weights
+from keyin.losses.image import future_pixel_weights, model_pixel_weights, plain_bce
 from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
 from keyin.models import KEYIN, KeyframePredictor
 from keyin.models.distributions import gaussian_kl
@@ -174,18 +175,42 @@ class KeyframeModule(L.LightningModule):
         future_length: torch.Tensor,
         discovery: str | None = None,
         keyframe_cost: KeyframeCost | None = None,
+        costs: torch.Tensor | None = None,
     ) -> list[list[int]]:
         """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
         "boundaries", "map" or "segmentation"; default: the module's ``discovery``), inside each clip;
         "map" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
-        ``map_keyframe_cost``)."""
+        ``map_keyframe_cost``) and take the segments' (B, N, S) BCE from ``costs`` where given."""
         clips = clips.to(self.device)
         price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
         with evaluating(self):
             return keyin_keyframes(
                 self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
                 price, self.hparams.map_boundary_weight,
-                future_pixel_weights(self.pixel_weights(clips), self.model.n_cond),
+                future_pixel_weights(self.pixel_weights(clips), self.model.n_cond), costs,
+            )
+
+    @torch.no_grad()
+    def video_costs(self, frames: torch.Tensor, block: int = 256) -> torch.Tensor | None:
+        """The interpolation BCE of every segment of a whole video, which all its windows share
+        (:func:`keyin.decode.segment_costs.video_interpolation_costs`); None where the BCE weighs
+        pixels by their change within a window (``foreground_weight``), so that windows differ.
+
+        Args:
+            frames: (T, H, W, C) uint8, the video's kept frames at the model's size.
+        Returns:
+            (T - 1, S) on the module's device, or None.
+        """
+        if not plain_bce(self.hparams.stage1):
+            return None
+        embeddings, pixels = [], []
+        with evaluating(self):
+            for first in range(0, len(frames), block):
+                chunk = frames[first : first + block].to(self.device).permute(0, 3, 1, 2).float().div_(255.0)
+                embeddings.append(self.model.encoder(chunk[None])[0])
+                pixels.append(chunk.flatten(1))
+            return video_interpolation_costs(
+                self.model.interpolator, self.model.decoder, torch.cat(embeddings), torch.cat(pixels), block
             )
 
     @torch.no_grad()

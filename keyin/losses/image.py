@@ -47,3 +47,8 @@ def model_pixel_weights(clips: Tensor, hparams: Mapping[str, Any]) -> Tensor | N
     return changed_pixel_weights(
         clips, hparams.get("foreground_weight", 1.0), hparams.get("foreground_threshold", 0.1)
     )
+
+
+def plain_bce(hparams: Mapping[str, Any]) -> bool:
+    """Whether a model's image likelihood is the plain BCE (:func:`model_pixel_weights` gives None)."""
+    return hparams.get("foreground_weight", 1.0) == 1

@@ -26,10 +26,12 @@ from keyin.data.clips import clip_item
 from keyin.data.imports import ImportedVideo
 from keyin.data.windows import cut_window, original_frame, original_time
 from keyin.decode.merge import WindowKeyframes, merge_windows
+from keyin.decode.segment_costs import window_costs
 from keyin.io import atomic_write_text, remove_stale_temporaries, replace_folder, temporary_path
 from keyin.viz.discovered import save_annotated_gif, save_contact_sheet, save_timeline
 
-Discoverer = Callable[[Tensor, Tensor], list[list[int]]]  # (B, L, C, H, W), (B,) -> per clip, future positions
+Discoverer = Callable[..., list[list[int]]]  # (B, L, C, H, W), (B,)[, costs=(B, N, S)] -> per clip, future positions
+VideoCosts = Callable[[Tensor], Tensor | None]  # (T, H, W, C) uint8 -> (T - 1, S) segment costs, or None
 Scorer = Callable[[Tensor, Tensor], Tensor]  # (B, L, C, H, W), (B,) -> (B, N) a score per future position
 FILES = ("keyframes.json", "contact_sheet.png", "timeline.png", "annotated.gif")
 SCORE = ("the probability of a keyframe at this frame under the model's posterior offsets, read along "
@@ -69,6 +71,7 @@ def discover_video(
     seam: int = 1,
     batch_size: int = 32,
     advance: Callable[[int], Any] = lambda windows: None,
+    video_costs: VideoCosts | None = None,
 ) -> list[Keyframe]:
     """The keyframes of one video: every window's, merged (:func:`keyin.decode.merge.merge_windows`),
     mapped to the original video's frames (:func:`keyin.data.windows.original_frame`) and seconds.
@@ -78,10 +81,18 @@ def discover_video(
         discoverer: future positions per clip, inside each clip's valid frames.
         scorer: (B, N) a score per future position; a keyframe's score is its position's.
         advance: called with the number of windows done after each batch (a progress bar).
+        video_costs: the segment costs of the whole video, computed once for the overlapping windows
+            and passed to ``discoverer`` as each window's ``costs``; None (or it returns None): none.
     """
+    shared = None if video_costs is None else video_costs(torch.from_numpy(video.frames))
     windows = []
     for starts, clips, future_length in window_batches(video, n_cond, n_future, batch_size):
-        positions, scores = discoverer(clips, future_length), scorer(clips, future_length)
+        if shared is None:
+            positions = discoverer(clips, future_length)
+        else:  # a window's extended index 0 (K^0) is its last conditioning frame
+            firsts = torch.tensor(starts) + n_cond - 1
+            positions = discoverer(clips, future_length, costs=window_costs(shared, firsts, future_length, n_future))
+        scores = scorer(clips, future_length)
         for start, length, row, row_scores in zip(starts, future_length.tolist(), positions, scores, strict=True):
             windows.append(WindowKeyframes(start, n_cond + length, list(row), [float(row_scores[p]) for p in row]))
         advance(len(starts))
@@ -185,6 +196,7 @@ def discover_videos(
     batch_size: int = 32,
     progress: bool = True,
     pictures: bool = True,
+    video_costs: VideoCosts | None = None,
 ) -> dict[str, Any]:
     """Discover every video's keyframes and write its folder ``<folder>/<video name>/`` (keyframes.json,
     and with ``pictures`` the contact sheet, timeline and annotated GIF).
@@ -192,6 +204,7 @@ def discover_videos(
     Args:
         model: what ``keyframes.json`` says about the model (checkpoint, method, rule, sizes).
         window_stride: kept frames between window starts (recorded; the starts are the videos').
+        video_costs: see :func:`discover_video`.
     Returns:
         A summary: videos, each one's folder and keyframe count, kept frames and windows run,
         seconds and kept frames per second.
@@ -205,7 +218,7 @@ def discover_videos(
         for video, name in zip(videos, folder_names([video.id for video in videos]), strict=True):
             keyframes = discover_video(
                 video, discoverer, scorer, n_cond, n_future, frame_stride, seam, batch_size,
-                advance=lambda windows: bar.update(task, advance=windows),
+                advance=lambda windows: bar.update(task, advance=windows), video_costs=video_costs,
             )
             record = keyframes_record(video, keyframes, model, n_cond, frame_stride, window_stride)
             write_video_folder(folder / name, video, keyframes, record, n_cond, frame_stride, pictures)

@@ -9,3 +9,28 @@ def test_boundary_costs_stay_on_the_device_of_the_scores():
     """The meta device stands in for a GPU (segment indices used to be CPU tensors)."""
     costs = boundary_segment_costs(torch.zeros(2, 5, device="meta"), 3)
     assert costs.device.type == "meta" and costs.shape == (2, 5, 3)
+
+
+def test_windows_cut_from_a_videos_costs_equal_the_windows_own_costs():
+    """Brute force: each window's interpolation BCE computed alone, against the rows of the whole
+    video's (computed in blocks smaller than the video), for windows inside and past its end."""
+    from keyin.decode.segment_costs import interpolation_costs, video_interpolation_costs, window_costs
+    from tests.planning.trained_models import keyframe_module
+
+    model = keyframe_module().model.eval()
+    n_future = 6
+    generator = torch.Generator().manual_seed(3)
+    frames = torch.rand(23, 3 * 16 * 16, generator=generator)
+    embeddings = model.encoder(frames.view(1, 23, 3, 16, 16))[0]
+    video = video_interpolation_costs(model.interpolator, model.decoder, embeddings, frames, block=5)
+    assert video.shape == (22, 3) and torch.isinf(video[-1, 1:]).all() and torch.isfinite(video[:-2]).all()
+    firsts = torch.tensor([0, 3, 9, 16, 19])
+    lengths = (22 - firsts).clamp(max=n_future)  # the last two windows are padded past the video's end
+    cut = window_costs(video, firsts, lengths, n_future)
+    for row, (first, length) in enumerate(zip(firsts.tolist(), lengths.tolist())):
+        alone = interpolation_costs(
+            model.interpolator, model.decoder, embeddings[None, first : first + length + 1],
+            frames[None, first + 1 : first + length + 1],
+        )[0]
+        torch.testing.assert_close(cut[row, :length], alone)
+        assert torch.isinf(cut[row, length:]).all()

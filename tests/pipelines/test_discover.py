@@ -105,3 +105,32 @@ def test_a_crash_while_writing_leaves_no_folder_and_no_temporary(video_file, tmp
 def test_folder_names_are_safe_and_unique():
     assert folder_names(["clips.npz[frames][3]", "a b.mp4", "a?b.mp4", "..", "demos.hdf5[demo_0]"]) == [
         "clips.npz_frames_3", "a_b.mp4", "a_b.mp4-2", "video", "demos.hdf5_demo_0"]
+
+
+@pytest.mark.parametrize("price", [20.0, "knee"])
+def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_path, price):
+    """keyin-discover computes map's segment costs once per video for its overlapping windows: the
+    keyframes are those of every window computing its own (a small untrained KEYIN, two conditioning
+    frames, random frames, the last windows padded)."""
+    import functools
+
+    from tests.lit.test_keyframe_teacher import keyframe_module
+
+    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map")
+    np.save(tmp_path / "noise.npy", np.random.default_rng(0).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
+    n_future = module.hparams.stage1["n_future"]
+    windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
+    (video,), _, _ = read_videos(tmp_path / "noise.npy", windows, None, None, progress=False)
+    discoverer = functools.partial(module.discover, keyframe_cost=price)
+    args = (video, discoverer, module.keyframe_probabilities, N_COND, n_future, 1)
+    alone = discover_video(*args, batch_size=4)
+    shared = discover_video(*args, batch_size=4, video_costs=module.video_costs)
+    assert len(alone) > 3 and shared == alone
+
+
+def test_window_relative_pixel_weights_keep_each_windows_own_costs():
+    from tests.lit.test_keyframe_teacher import keyframe_module
+
+    module = keyframe_module(teacher_weight=0.0)
+    module.hparams.stage1["foreground_weight"] = 20.0  # changed pixels weigh more: relative to a window's first frame
+    assert module.video_costs(torch.zeros(5, 8, 8, 1, dtype=torch.uint8)) is None
