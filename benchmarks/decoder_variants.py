@@ -5,13 +5,14 @@
 
 The decoder is 90 % of the exact segmentation's time (benchmarks/results/map_cost_profile.md). Each
 variant decodes the same random embeddings; its time is the best of ``--repeats`` after one warm-up
-call, its largest logit difference is against the eager float32 decoder:
+call, its largest logit difference is against the plain path:
 
-- eager: ``ConvDecoder.forward`` as trained;
-- channels_last: the decoder's weights in ``torch.channels_last``;
-- bf16 autocast: ``torch.autocast("cpu", torch.bfloat16)`` (inexact);
-- coordinate bias: the coordinate channels' share of each transposed convolution computed once per
-  resolution and added, instead of concatenated to every frame's features (exact up to rounding).
+- plain: the upsampling as training runs it (coordinate planes concatenated to every frame's
+  features, contiguous feature maps): ``ConvDecoder._upsample``;
+- eval: ``ConvDecoder.forward`` in eval mode, the default for inference and for the frozen decoder of
+  stage 2 since 2026-12-05 (feature maps in ``channels_last``, each conv's response to the coordinate
+  planes added as a bias computed once per call);
+- eval, bf16 autocast: ``torch.autocast("cpu", torch.bfloat16)`` around it (inexact).
 """
 
 from __future__ import annotations
@@ -23,26 +24,10 @@ from pathlib import Path
 from typing import Callable
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor
 
 from common import cpu_model, publish
 from keyin.lit.registry import load_trained_module
-from keyin.models.conv import ConvDecoder, coordinate_planes
-
-
-def coordinate_bias_decode(decoder: ConvDecoder, embeddings: Tensor) -> Tensor:
-    """``decoder(embeddings)`` with each block's coordinate planes convolved once, not per frame
-    (a decoder with ``coord_channels`` and no skips)."""
-    features = decoder.head(embeddings.reshape(-1, embeddings.shape[-1], 1, 1))
-    for block in decoder.upsampling:
-        conv, channels = block[0], features.shape[1]
-        planes = coordinate_planes(features.shape[-1], features)  # (1, 2, h, h)
-        shared = F.conv_transpose2d(planes, conv.weight[channels:], None, conv.stride, conv.padding)
-        features = F.conv_transpose2d(features, conv.weight[:channels], conv.bias, conv.stride, conv.padding) + shared
-        for layer in block[1:]:
-            features = layer(features)
-    return features
 
 
 def best_time(run: Callable[[], Tensor], repeats: int) -> float:
@@ -67,32 +52,27 @@ def main() -> None:
     torch.manual_seed(0)
     module, _ = load_trained_module(args.ckpt)
     decoder = module.model.decoder.eval()
-    if not decoder.coord_channels or decoder.skips:
-        parser.error(f"{args.ckpt}'s decoder has no coordinate channels or has skips: the coordinate bias does not apply")
+    if decoder.skips:
+        parser.error(f"{args.ckpt}'s decoder has skips: its eval path is the plain one")
     embeddings = torch.randn(args.frames, decoder.head[0].in_channels)
     rows = ["| variant | seconds | ms / frame | speed-up | largest logit difference |", "|---|---|---|---|---|"]
     with torch.inference_mode():
-        reference = decoder(embeddings)
+
+        def plain() -> Tensor:
+            return decoder._upsample(decoder.head(embeddings.reshape(*embeddings.shape, 1, 1)), None)
 
         def bf16() -> Tensor:
             with torch.autocast("cpu", dtype=torch.bfloat16):
                 return decoder(embeddings).float()
 
-        variants = {
-            "eager": lambda: decoder(embeddings),
-            "coordinate bias": lambda: coordinate_bias_decode(decoder, embeddings),
-            "bf16 autocast": bf16,
-        }
-        eager = None
+        reference = plain()
+        variants = {"plain": plain, "eval": lambda: decoder(embeddings), "eval, bf16 autocast": bf16}
+        first = None
         for name, run in variants.items():
             seconds = best_time(run, args.repeats)
-            eager = eager or seconds
+            first = first or seconds
             difference = (run().float() - reference).abs().max().item()
-            rows.append(f"| {name} | {seconds:.3f} | {1000 * seconds / args.frames:.3f} | {eager / seconds:.2f}x | {difference:.2g} |")
-        decoder.to(memory_format=torch.channels_last)  # last: it changes the decoder in place
-        seconds = best_time(lambda: decoder(embeddings), args.repeats)
-        difference = (decoder(embeddings) - reference).abs().max().item()
-        rows.append(f"| channels_last | {seconds:.3f} | {1000 * seconds / args.frames:.3f} | {eager / seconds:.2f}x | {difference:.2g} |")
+            rows.append(f"| {name} | {seconds:.3f} | {1000 * seconds / args.frames:.3f} | {first / seconds:.2f}x | {difference:.2g} |")
     publish("\n".join([
         f"## The frame decoder's variants on {args.frames} embeddings ({args.ckpt})\n",
         f"- command: `python benchmarks/decoder_variants.py --ckpt {args.ckpt} --frames {args.frames} --threads {args.threads} --repeats {args.repeats}`",

@@ -136,6 +136,27 @@ def test_eval_mode_single_sample_equals_batch_row():
     torch.testing.assert_close(decoder(encoder(frames[:1])), decoder(encoder(frames))[:1])
 
 
+@pytest.mark.parametrize("image_size, channels, depth", IMAGE_CONFIGS)
+@pytest.mark.parametrize("coord_channels", [False, True])
+@pytest.mark.parametrize("norm", ["batch", "group", "none"])
+def test_eval_mode_decodes_the_same_logits_and_gradients_as_the_plain_path(image_size, channels, depth, coord_channels, norm):
+    """Eval mode's faster upsampling (channels_last, the coordinate planes as a bias) against the
+    plain concatenating path of the same weights, values and the gradient to the embeddings."""
+    torch.manual_seed(0)
+    decoder = ConvDecoder(image_size, channels, WIDTH, EMBED_DIM, coord_channels, norm)
+    decoder(torch.randn(6, EMBED_DIM))  # one train-mode call moves batch norm's running statistics
+    decoder.eval()
+    embeddings = torch.randn(3, 2, EMBED_DIM, requires_grad=True)
+    fast = decoder(embeddings)
+    plain = decoder._upsample(decoder.head(embeddings.reshape(6, EMBED_DIM, 1, 1)), None).reshape_as(fast)
+    torch.testing.assert_close(fast, plain, atol=1e-5, rtol=1e-5)
+    assert fast.is_contiguous() and fast.shape == (3, 2, channels, image_size, image_size)
+    weights = torch.randn_like(fast)
+    (fast_grad,) = torch.autograd.grad((fast * weights).sum(), embeddings)
+    (plain_grad,) = torch.autograd.grad((plain * weights).sum(), embeddings)
+    torch.testing.assert_close(fast_grad, plain_grad, atol=1e-4, rtol=1e-4)  # sums of more terms: more rounding
+
+
 @pytest.mark.parametrize("image_size", [0, 4, 16 + 8, 48, 100])
 @pytest.mark.parametrize("module", [ConvEncoder, ConvDecoder])
 def test_image_size_must_be_power_of_two_at_least_8(image_size, module):
