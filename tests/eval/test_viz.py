@@ -77,3 +77,20 @@ def test_trajectories_are_drawn_over_the_scene(tmp_path):
     background = np.full((64, 64, 3), 200, np.uint8)
     path = save_trajectories(background, wall, tracks[0][0], {"demos": tracks, "samples": tracks[:1]}, tmp_path / "t.png")
     assert iio.imread(path).shape[1] > iio.imread(path).shape[0]  # two panels side by side
+
+
+def test_contact_sheet_shows_each_keyframe_enlarged_in_reading_order(tmp_path):
+    """Eight solid grey frames of levels 20, 40, …: each cell's centre has its frame's level, left to
+    right then down (six columns), and every frame is drawn at the same whole-pixel scale."""
+    from keyin.viz.discovered import SHEET_COLUMNS, save_contact_sheet
+
+    levels = [20 * (i + 1) for i in range(8)]
+    images = np.stack([np.full((16, 16, 1), level, dtype=np.uint8) for level in levels])
+    sheet = iio.imread(save_contact_sheet(tmp_path / "sheet.png", images, [f"frame {i}" for i in range(8)], "take"))
+    assert sheet.ndim == 3 and sheet.shape[1] % SHEET_COLUMNS == 0
+    cell_width = sheet.shape[1] // SHEET_COLUMNS
+    first_row = [sheet[:, column * cell_width + cell_width // 2, 0] for column in range(SHEET_COLUMNS)]
+    second_row = [sheet[:, column * cell_width + cell_width // 2, 0] for column in range(2)]
+    runs = [np.flatnonzero(column == level) for column, level in zip(first_row + second_row, levels)]
+    assert all(len(run) == len(runs[0]) >= 16 for run in runs)  # each frame as tall, enlarged
+    assert all(runs[i][0] == runs[0][0] for i in range(SHEET_COLUMNS)) and runs[SHEET_COLUMNS][0] > runs[0][-1]
