@@ -24,7 +24,7 @@ VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own 
 SEGMENT_COST_RULES = ("map", "segmentation")  # the rules that read the interpolation BCE of every segment
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
 # posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every candidate segment's
-# frames (~16 ms; benchmarks/results/discover_speed.md).
+# frames (~7 ms in keyin-discover; benchmarks/results/discover_speed_rules_brownian.md).
 RULES_BY_COST = ("boundaries", "offsets", "map")
 FAST_RULE_TOLERANCE = 0.01  # how far below map's validation F1 a cheaper rule may be and still be chosen
 
@@ -102,6 +102,10 @@ def map_keyframes(
         Per clip, the interior keyframe positions.
     """
     max_offset = interpolator.max_offset
+    if costs is not None and (weights is not None or costs.shape != (*frames.shape[:2], max_offset)):
+        raise ValueError(f"costs must be the (B, N, S) = {(*frames.shape[:2], max_offset)} plain BCE of the clips' "
+                         f"segments (no pixel weights), got {tuple(costs.shape)}"
+                         + (" with pixel weights" if weights is not None else ""))
 
     def segment_costs(rows: Tensor, length: int) -> Tensor:
         rows = rows.to(boundary_emb.device)
@@ -187,6 +191,8 @@ def keyin_keyframes(
         raise ValueError(f"rule must be one of {KEYIN_RULES}, got {rule!r}")
     # the posterior mean, its offset evidence read along the argmax path (what the readout reads)
     embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
+    if costs is not None and rule not in SEGMENT_COST_RULES:
+        raise ValueError(f"rule {rule!r} reads no segment costs; pass costs only with {SEGMENT_COST_RULES}")
     if rule == "offsets":
         return offset_keyframes(keys.offset_probs, future_length)
     n_future, lengths = clips.shape[1] - model.n_cond, future_length.cpu()

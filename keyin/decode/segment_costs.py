@@ -18,7 +18,8 @@ def _all_segments(batch: int, n_future: int, max_offset: int, n_starts: int | No
     """clip, start, offset (R,) of every in-clip segment of every clip (starting before ``n_starts``)."""
     start, offset = segment_starts_offsets(n_future, max_offset)
     if n_starts is not None:
-        start, offset = start[start < n_starts], offset[start < n_starts]
+        kept = start < n_starts
+        start, offset = start[kept], offset[kept]
     clip = torch.arange(batch).repeat_interleave(len(start))
     return clip, start.repeat(batch), offset.repeat(batch)
 
@@ -89,19 +90,22 @@ def video_interpolation_costs(
     overlapping windows need not compute them twice. Computed ``block`` starts at a time.
 
     Args:
-        embeddings: (T, E) the encoder's embedding of every kept frame.
-        frames: (T, D) those frames in [0, 1], flattened.
+        embeddings: (T, E) the encoder's embedding of every kept frame, T ≥ 2.
+        frames: (T, D) those frames, flattened: in [0, 1], or uint8 (0-255, turned into [0, 1] a block at
+            a time on the embeddings' device, so that a long video's pixels stay small).
     Returns:
         (T - 1, S) the cost of the segment from frame ``t`` to frame ``t + o + 1`` at ``[t, o]``,
         ``inf`` where it leaves the video.
     """
     n_frames, max_offset = len(embeddings), interpolator.max_offset
+    if n_frames < 2 or len(frames) != n_frames:
+        raise ValueError(f"a video's segment costs need T ≥ 2 embeddings and as many frames, got {n_frames} and {len(frames)}")
     costs = []
     for first in range(0, n_frames - 1, block):
         last = min(first + block + max_offset, n_frames)  # the block's starts and the frames they reach
-        part = interpolation_costs(
-            interpolator, decoder, embeddings[None, first:last], frames[None, first + 1 : last], n_starts=block
-        )
+        pixels = frames[first + 1 : last].to(embeddings.device)
+        pixels = pixels.float().div_(255.0) if pixels.dtype == torch.uint8 else pixels
+        part = interpolation_costs(interpolator, decoder, embeddings[None, first:last], pixels[None], n_starts=block)
         costs.append(part[0, :block])
     return torch.cat(costs)
 
@@ -119,11 +123,15 @@ def window_costs(video_costs: Tensor, firsts: Tensor, lengths: Tensor, n_future:
         window's valid frames.
     """
     (n_starts, max_offset), device = video_costs.shape, video_costs.device
+    firsts, lengths = firsts.to(device), lengths.to(device)
+    if (firsts < 0).any() or (firsts + lengths > n_starts).any():
+        raise ValueError(f"windows must lie inside the video's {n_starts + 1} frames: first frames {firsts.tolist()}, "
+                         f"valid future frames {lengths.tolist()}")
     steps = torch.arange(n_future, device=device)
-    rows = firsts.to(device)[:, None] + steps  # (B, N)
+    rows = firsts[:, None] + steps  # (B, N)
     costs = video_costs[rows.clamp(max=n_starts - 1)]  # (B, N, S)
     end = steps[None, :, None] + torch.arange(1, max_offset + 1, device=device)  # (1, N, S): start + offset
-    return costs.masked_fill(end > lengths.to(device)[:, None, None], float("inf"))
+    return costs.masked_fill(end > lengths[:, None, None], float("inf"))
 
 
 @torch.no_grad()

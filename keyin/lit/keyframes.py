@@ -203,15 +203,13 @@ class KeyframeModule(L.LightningModule):
         """
         if not plain_bce(self.hparams.stage1):
             return None
-        embeddings, pixels = [], []
+        pixels = frames.permute(0, 3, 1, 2).flatten(1)  # (T, C·H·W) uint8, as the clips' layout
+        embeddings = []
         with evaluating(self):
             for first in range(0, len(frames), block):
-                chunk = frames[first : first + block].to(self.device).permute(0, 3, 1, 2).float().div_(255.0)
-                embeddings.append(self.model.encoder(chunk[None])[0])
-                pixels.append(chunk.flatten(1))
-            return video_interpolation_costs(
-                self.model.interpolator, self.model.decoder, torch.cat(embeddings), torch.cat(pixels), block
-            )
+                chunk = pixels[first : first + block].to(self.device).float().div_(255.0)
+                embeddings.append(self.model.encoder(chunk.view(1, -1, *self.model.encoder.image_shape))[0])
+            return video_interpolation_costs(self.model.interpolator, self.model.decoder, torch.cat(embeddings), pixels, block)
 
     @torch.no_grad()
     def keyframe_probabilities(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:

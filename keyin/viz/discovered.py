@@ -51,7 +51,8 @@ def save_contact_sheet(path: Path, images: np.ndarray, captions: Sequence[str], 
     height, width = images.shape[1:3] if len(images) else (SHEET_FRAME_PIXELS, SHEET_FRAME_PIXELS)
     scale = max(1, round(SHEET_FRAME_PIXELS / width))
     cell_height, cell_width = CAPTION_PIXELS + height * scale + SHEET_GAP, width * scale + SHEET_GAP
-    sheet = np.full((TITLE_PIXELS + rows * cell_height, columns * cell_width, 3), 255, dtype=np.uint8)
+    sheet_width = max(columns * cell_width, int(SHEET_FONT(13).getlength(title)) + SHEET_GAP)  # room for the title
+    sheet = np.full((TITLE_PIXELS + rows * cell_height, sheet_width, 3), 255, dtype=np.uint8)
     for index, image in enumerate(images):
         row, column = divmod(index, columns)
         top, left = TITLE_PIXELS + row * cell_height + CAPTION_PIXELS, column * cell_width + SHEET_GAP // 2

@@ -34,3 +34,16 @@ def test_windows_cut_from_a_videos_costs_equal_the_windows_own_costs():
         )[0]
         torch.testing.assert_close(cut[row, :length], alone)
         assert torch.isinf(cut[row, length:]).all()
+
+
+def test_video_costs_refuse_a_video_too_short_and_windows_outside_it():
+    import pytest
+
+    from keyin.decode.segment_costs import video_interpolation_costs, window_costs
+    from tests.planning.trained_models import keyframe_module
+
+    model = keyframe_module().model.eval()
+    with pytest.raises(ValueError, match="T ≥ 2"):
+        video_interpolation_costs(model.interpolator, model.decoder, torch.zeros(1, 8), torch.zeros(1, 768))
+    with pytest.raises(ValueError, match="inside the video"):
+        window_costs(torch.zeros(10, 3), torch.tensor([8]), torch.tensor([4]), 6)

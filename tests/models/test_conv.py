@@ -146,8 +146,11 @@ def test_eval_mode_decodes_the_same_logits_and_gradients_as_the_plain_path(image
     decoder = ConvDecoder(image_size, channels, WIDTH, EMBED_DIM, coord_channels, norm)
     decoder(torch.randn(6, EMBED_DIM))  # one train-mode call moves batch norm's running statistics
     decoder.eval()
+    eval_path, calls = decoder._upsample_eval, []
+    decoder._upsample_eval = lambda features: calls.append(len(features)) or eval_path(features)
     embeddings = torch.randn(3, 2, EMBED_DIM, requires_grad=True)
     fast = decoder(embeddings)
+    assert calls == [6]  # eval mode took the eval path
     plain = decoder._upsample(decoder.head(embeddings.reshape(6, EMBED_DIM, 1, 1)), None).reshape_as(fast)
     torch.testing.assert_close(fast, plain, atol=1e-5, rtol=1e-5)
     assert fast.is_contiguous() and fast.shape == (3, 2, channels, image_size, image_size)

@@ -109,11 +109,13 @@ def test_folder_names_are_safe_and_unique():
 
 @pytest.mark.parametrize("price", [20.0, "knee"])
 def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_path, price):
-    """keyin-discover computes map's segment costs once per video for its overlapping windows: the
-    keyframes are those of every window computing its own (a small untrained KEYIN, two conditioning
-    frames, random frames, the last windows padded)."""
+    """keyin-discover computes map's segment costs once per video for its overlapping windows: each
+    window receives its own costs (brute force: computed from the window alone) and the keyframes are
+    those of every window computing its own (a small untrained KEYIN, two conditioning frames, random
+    frames, the last windows padded)."""
     import functools
 
+    from keyin.decode.segment_costs import interpolation_costs
     from tests.lit.test_keyframe_teacher import keyframe_module
 
     module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map")
@@ -121,11 +123,26 @@ def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_
     n_future = module.hparams.stage1["n_future"]
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
     (video,), _, _ = read_videos(tmp_path / "noise.npy", windows, None, None, progress=False)
-    discoverer = functools.partial(module.discover, keyframe_cost=price)
+    received = []
+
+    def discoverer(clips, future_length, costs=None):
+        received.append((clips, future_length, costs))
+        return module.discover(clips, future_length, keyframe_cost=price, costs=costs)
+
     args = (video, discoverer, module.keyframe_probabilities, N_COND, n_future, 1)
     alone = discover_video(*args, batch_size=4)
+    assert all(costs is None for _, _, costs in received)
+    received.clear()
     shared = discover_video(*args, batch_size=4, video_costs=module.video_costs)
     assert len(alone) > 3 and shared == alone
+    model, offsets = module.model.eval(), torch.arange(1, module.model.interpolator.max_offset + 1)
+    for clips, lengths, costs in received:
+        own = interpolation_costs(model.interpolator, model.decoder, model.encoder(clips)[:, N_COND - 1 :],
+                                  clips[:, N_COND:].flatten(2))
+        for row, length in enumerate(lengths.tolist()):
+            inside = torch.arange(n_future)[:, None] + offsets <= length  # (N, S): the segment ends in the window
+            assert torch.equal(torch.isfinite(costs[row]), inside)
+            torch.testing.assert_close(costs[row][inside], own[row][inside])
 
 
 def test_window_relative_pixel_weights_keep_each_windows_own_costs():
@@ -134,3 +151,14 @@ def test_window_relative_pixel_weights_keep_each_windows_own_costs():
     module = keyframe_module(teacher_weight=0.0)
     module.hparams.stage1["foreground_weight"] = 20.0  # changed pixels weigh more: relative to a window's first frame
     assert module.video_costs(torch.zeros(5, 8, 8, 1, dtype=torch.uint8)) is None
+
+
+def test_segment_costs_passed_where_no_rule_reads_them_are_refused():
+    from tests.lit.test_keyframe_teacher import batch, keyframe_module
+
+    module, clips = keyframe_module(teacher_weight=0.0), batch()
+    costs = torch.zeros(3, 6, 3)
+    with pytest.raises(ValueError, match="reads no segment costs"):
+        module.discover(clips["frames"], clips["future_length"], discovery="offsets", costs=costs)
+    with pytest.raises(ValueError, match=r"\(B, N, S\)"):
+        module.discover(clips["frames"], clips["future_length"], discovery="map", costs=costs[:, :5])
