@@ -46,7 +46,7 @@ from keyin.cli.app import CONFIG_MODULE
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
-from keyin.decode.rules import SEGMENT_COST_RULES
+from keyin.decode.rules import BOUNDARY_SCORE_RULES, SEGMENT_COST_RULES
 from keyin.eval.f1 import keyframe_scores
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module
@@ -168,7 +168,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=600, help="frames of the long clip")
     parser.add_argument("--ckpt", nargs="*", default=[], help="also trained stage-2 checkpoints (pretrained:<name> too)")
-    parser.add_argument("--rules", nargs="+", default=["map"], help="the rules each model runs (map, boundaries, offsets)")
+    parser.add_argument("--rules", nargs="+", default=["map"], help="the rules each model runs (map, map_pruned, boundaries, offsets)")
     parser.add_argument("--per-window", action="store_true",
                         help="also run map with each window's own segment costs, and check the keyframes are the same")
     parser.add_argument("--threads", type=int, default=1)
@@ -190,7 +190,7 @@ def main() -> None:
         results = [(run(module, label, rule, clip, movie, turns, Path(tmp), shared), scored)
                    for label, module, scored in models for rule in args.rules
                    for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and plain_bce(module.hparams.stage1) else (True,))
-                   if rule != "boundaries" or module.hparams.offset_evidence]
+                   if rule not in BOUNDARY_SCORE_RULES or module.hparams.offset_evidence]
     for (shared, _), (alone, _) in zip(results, results[1:]):
         if alone["label"] == shared["label"] + " per window" and alone["keyframes"] != shared["keyframes"]:
             raise SystemExit(f"{shared['label']}: the shared segment costs found other keyframes than the per-window ones")

@@ -16,7 +16,7 @@ from keyin.cli.checks import optional_name, require_int_at_least, require_positi
 from keyin.data.frames import fit_note
 from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
 from keyin.data.labels import check_known, read_labels
-from keyin.decode.rules import KEYIN_RULES, SEGMENT_COST_RULES
+from keyin.decode.rules import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
@@ -103,12 +103,12 @@ def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> di
     """What keyframes.json says about the model and its rule."""
     sizes = module.hparams.stage1
     rule = chosen_rule(cfg, module)
-    if rule == "boundaries" and not module.hparams.offset_evidence:
-        raise ConfigError(f"rule=boundaries needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
+    if rule in BOUNDARY_SCORE_RULES and not module.hparams.offset_evidence:
+        raise ConfigError(f"rule={rule} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
                           f"has not; pass rule=map or rule=offsets")
     cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
     return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule,
-            "keyframe_cost": cost if rule == "map" else None,
+            "keyframe_cost": cost if rule in ("map", "map_pruned") else None,
             **{key: sizes[key] for key in ("image_size", "channels", "n_cond", "n_future")}}
 
 

@@ -14,18 +14,21 @@ from torch import Tensor
 
 from keyin.decode.ends import sequence_ends, with_ends
 from keyin.decode.offsets import keyframe_probabilities, offset_keyframes
-from keyin.decode.segment_costs import boundary_segment_costs, interpolation_costs
+from keyin.decode.segment_costs import boundary_segment_costs, candidate_segments, interpolation_costs
 from keyin.decode.segmentation import KeyframeCost, decode_by_length
 from keyin.losses.image import future_pixel_weights
 from keyin.models.keyin import KEYIN
 
-KEYIN_RULES = ("offsets", "boundaries", "map", "segmentation")
+KEYIN_RULES = ("offsets", "boundaries", "map", "map_pruned", "segmentation")
 VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
 SEGMENT_COST_RULES = ("map", "segmentation")  # the rules that read the interpolation BCE of every segment
+BOUNDARY_SCORE_RULES = ("boundaries", "map_pruned")  # the rules that read stage 2's boundary scores (offset_evidence)
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
-# posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every candidate segment's
-# frames (~7 ms in keyin-discover; benchmarks/results/discover_speed_rules_brownian.md).
-RULES_BY_COST = ("boundaries", "offsets", "map")
+# posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every segment's frames (~7 ms
+# in keyin-discover), map_pruned only those of the segments between candidate keyframes
+# (benchmarks/results/discover_speed_rules_brownian.md).
+RULES_BY_COST = ("boundaries", "offsets", "map_pruned", "map")
+MAP_CANDIDATE_LOGIT = -4.0  # map_pruned: the boundary logit a frame needs to be a candidate keyframe (docs/decisions.md)
 FAST_RULE_TOLERANCE = 0.01  # how far below map's validation F1 a cheaper rule may be and still be chosen
 
 
@@ -84,6 +87,7 @@ def map_keyframes(
     boundary_weight: float = 0.0,
     weights: Tensor | None = None,
     costs: Tensor | None = None,
+    candidates: Tensor | None = None,
 ) -> list[list[int]]:
     """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
     optionally, the keyframe predictor's boundary scores as a prior.
@@ -98,6 +102,8 @@ def map_keyframes(
         weights: (B, N, D) pixel weights of the frames, None for the plain BCE.
         costs: (B, N, S) the clips' interpolation BCE if already known (windows of one video share
             them: :func:`keyin.decode.segment_costs.window_costs`), else None.
+        candidates: (B, N) bool, the frames that may be keyframes (:func:`candidate_segments`: only
+            the segments between them are priced, so only their frames are rendered), None for all.
     Returns:
         Per clip, the interior keyframe positions.
     """
@@ -109,13 +115,15 @@ def map_keyframes(
 
     def segment_costs(rows: Tensor, length: int) -> Tensor:
         rows = rows.to(boundary_emb.device)
+        keep = None if candidates is None else candidate_segments(candidates[rows.to(candidates.device), :length], max_offset, n_keyframes)
         if costs is None:
             bce = interpolation_costs(
                 interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
-                None if weights is None else weights[rows, :length],
+                None if weights is None else weights[rows, :length], keep=keep,
             )
         else:
             bce = costs[rows.to(costs.device), :length]
+            bce = bce if keep is None else bce.masked_fill(~keep.to(bce.device), float("inf"))
         if scores is not None and boundary_weight:
             bce = bce + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset).to(bce.device)
         return bce  # best_segmentation moves it to the CPU
@@ -167,6 +175,7 @@ def keyin_keyframes(
     boundary_weight: float = 0.0,
     pixel_weights: Tensor | None = None,
     costs: Tensor | None = None,
+    candidate_logit: float = MAP_CANDIDATE_LOGIT,
 ) -> list[list[int]]:
     """KEYIN's keyframes of clips, in posterior mode with the posterior mean, by one of its rules.
 
@@ -184,7 +193,7 @@ def keyin_keyframes(
         pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
         costs: (B, N, S) that BCE of every segment if already known (see :func:`map_keyframes`).
     Returns:
-        Per clip, the keyframe positions inside its valid frames; "boundaries" and "map" add the
+        Per clip, the keyframe positions inside its valid frames; "boundaries" and the map rules add the
         end of a sequence that stops inside the window (:func:`with_sequence_ends`).
     """
     if rule not in KEYIN_RULES:
@@ -192,20 +201,20 @@ def keyin_keyframes(
     # the posterior mean, its offset evidence read along the argmax path (what the readout reads)
     embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
     if costs is not None and rule not in SEGMENT_COST_RULES:
-        raise ValueError(f"rule {rule!r} reads no segment costs; pass costs only with {SEGMENT_COST_RULES}")
+        raise ValueError(f"rule {rule!r} takes no precomputed segment costs; pass costs only with {SEGMENT_COST_RULES}")
+    if rule in BOUNDARY_SCORE_RULES and keys.boundary_scores is None:
+        raise ValueError(f"rule {rule!r} needs the boundary scores of offset_evidence")
     if rule == "offsets":
         return offset_keyframes(keys.offset_probs, future_length)
     n_future, lengths = clips.shape[1] - model.n_cond, future_length.cpu()
     if rule == "boundaries":
-        if keys.boundary_scores is None:
-            raise ValueError("rule 'boundaries' needs the boundary scores of offset_evidence")
         interior = boundary_keyframes(keys.boundary_scores, lengths, model.predictor.n_keyframes, model.predictor.max_offset)
     else:
         interior = map_keyframes(
             model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
             future_length, model.predictor.n_keyframes, keyframe_cost,
             None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
-            costs=costs,
+            costs=costs, candidates=keys.boundary_scores >= candidate_logit if rule == "map_pruned" else None,
         )
     return with_sequence_ends(interior, lengths, n_future)
 

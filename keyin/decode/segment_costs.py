@@ -47,6 +47,7 @@ def interpolation_costs(
     weights: Tensor | None = None,
     chunk: int = 1024,
     n_starts: int | None = None,
+    keep: Tensor | None = None,
 ) -> Tensor:
     """Summed pixel BCE of interpolating every in-clip segment between true boundary embeddings.
 
@@ -59,6 +60,8 @@ def interpolation_costs(
         chunk: segments per interpolator/decoder call.
         n_starts: only the segments starting at the first ``n_starts`` extended indices (the others
             stay ``inf``); None: all.
+        keep: (B, N, S) bool, only the segments marked (:func:`candidate_segments`; the others stay
+            ``inf``); None: all.
     Returns:
         (B, N, S) costs, ``inf`` where the segment leaves the clip.
     """
@@ -66,6 +69,9 @@ def interpolation_costs(
     n_future, max_offset, device = n_ext - 1, interpolator.max_offset, boundary_emb.device
     costs = torch.full((batch, n_future, max_offset), float("inf"), device=device)
     clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset, n_starts))
+    if keep is not None:
+        kept = keep.to(device)[clip, start, offset - 1]
+        clip, start, offset = clip[kept], start[kept], offset[kept]
     for first in range(0, len(clip), chunk):
         c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
         predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
@@ -108,6 +114,38 @@ def video_interpolation_costs(
         part = interpolation_costs(interpolator, decoder, embeddings[None, first:last], pixels[None], n_starts=block)
         costs.append(part[0, :block])
     return torch.cat(costs)
+
+
+def candidate_segments(candidates: Tensor, max_offset: int, n_keyframes: int) -> Tensor:
+    """The segments a segmentation may use when each of its keyframes must be a candidate frame.
+
+    The clip's start (K^0) and closing boundary (its last frame) are always boundaries. A clip whose
+    candidates admit no segmentation into at most M gaps of at most S keeps every segment, so that
+    its best segmentation is the unrestricted one.
+
+    Args:
+        candidates: (B, N) bool, the future positions that may be keyframes.
+        max_offset: S; n_keyframes: M.
+    Returns:
+        (B, N, S) bool: ``[b, a, o - 1]`` whether the segment from extended index ``a`` to ``a + o``
+        lies in the clip and both its ends may be boundaries.
+    """
+    batch, n_future = candidates.shape
+    device = candidates.device
+    always = torch.ones(batch, 1, dtype=torch.bool, device=device)
+    allowed = torch.cat([always, candidates[:, :-1].bool(), always], dim=1)  # (B, N + 1) on the extended index
+    start = torch.arange(n_future, device=device)[:, None]
+    end = start + torch.arange(1, max_offset + 1, device=device)  # (N, S)
+    keep = allowed[:, :n_future, None] & allowed[:, end.clamp(max=n_future)] & (end <= n_future)
+    fewest = torch.full((batch, n_future + 1), n_future + 1, dtype=torch.long, device=device)  # fewest gaps to reach k
+    fewest[:, 0] = 0
+    for k in range(1, n_future + 1):
+        offsets = torch.arange(1, min(max_offset, k) + 1, device=device)
+        reached = torch.where(keep[:, k - offsets, offsets - 1], fewest[:, k - offsets] + 1, n_future + 1)
+        fewest[:, k] = reached.min(dim=1).values
+    infeasible = fewest[:, n_future] > n_keyframes
+    keep[infeasible] = end[None] <= n_future
+    return keep
 
 
 def window_costs(video_costs: Tensor, firsts: Tensor, lengths: Tensor, n_future: int) -> Tensor:

@@ -14,7 +14,14 @@ from typing import Any, Callable, Sequence
 import lightning as L
 import torch
 
-from keyin.decode.rules import KEYIN_RULES, VARIANT_RULES, keyin_keyframe_probabilities, keyin_keyframes
+from keyin.decode.rules import (
+    BOUNDARY_SCORE_RULES,
+    KEYIN_RULES,
+    MAP_CANDIDATE_LOGIT,
+    VARIANT_RULES,
+    keyin_keyframe_probabilities,
+    keyin_keyframes,
+)
 from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KNEE, KeyframeCost
 from keyin.decode.teacher import teacher_loss
@@ -59,6 +66,7 @@ class KeyframeModule(L.LightningModule):
         teacher_leaves: bool = False,  # the teacher also says where the chain leaves the clip
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
+        map_candidate_logit: float = MAP_CANDIDATE_LOGIT,  # discovery=map_pruned: a keyframe's least boundary logit
         # the paper's open choices (docs/decisions.md "The paper's stage 2: every open choice measured")
         delta_input: str = "soft",  # what the frozen interpolator reads of δ (models/keyin.py DELTA_INPUTS)
         loss_reduction: str = "sum",  # what the β's weigh against (losses/soft_keyframe.py REDUCTIONS)
@@ -74,8 +82,8 @@ class KeyframeModule(L.LightningModule):
             raise ValueError(f"discovery must be one of {KEYIN_RULES}, got {discovery!r}")
         if isinstance(map_keyframe_cost, str) and map_keyframe_cost != KNEE:
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
-        if discovery == "boundaries" and not offset_evidence:
-            raise ValueError("discovery='boundaries' needs offset_evidence (the boundary scores)")
+        if discovery in BOUNDARY_SCORE_RULES and not offset_evidence:
+            raise ValueError(f"discovery={discovery!r} needs offset_evidence (the boundary scores)")
         if frozen not in FROZEN_IN_STAGE2:
             raise ValueError(f"frozen must be one of {tuple(FROZEN_IN_STAGE2)}, got {frozen!r}")
         if loss_reduction not in REDUCTIONS:
@@ -178,8 +186,8 @@ class KeyframeModule(L.LightningModule):
         costs: torch.Tensor | None = None,
     ) -> list[list[int]]:
         """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
-        "boundaries", "map" or "segmentation"; default: the module's ``discovery``), inside each clip;
-        "map" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
+        "boundaries", "map", "map_pruned" or "segmentation"; default: the module's ``discovery``), inside
+        each clip; "map", "map_pruned" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
         ``map_keyframe_cost``) and take the segments' (B, N, S) BCE from ``costs`` where given."""
         clips = clips.to(self.device)
         price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
@@ -188,6 +196,7 @@ class KeyframeModule(L.LightningModule):
                 self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
                 price, self.hparams.map_boundary_weight,
                 future_pixel_weights(self.pixel_weights(clips), self.model.n_cond), costs,
+                self.hparams.map_candidate_logit,
             )
 
     @torch.no_grad()
@@ -248,12 +257,14 @@ class KeyframeModule(L.LightningModule):
     def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
         """The discovery rules to score, by method name: the configured one (named ``name``) first;
         with offset evidence also the other :data:`VARIANT_RULES`, as ``<name>_<rule>``. ``rules``
-        picks among those and "segmentation" (any model: stage 1's segmentation at the same price)."""
+        picks among those, "map_pruned" (with offset evidence) and "segmentation" (any model: stage 1's
+        segmentation at the same price)."""
         scored = [self.hparams.discovery]
         if self.hparams.offset_evidence:
             scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
         if rules is not None:
-            choosable = scored + [rule for rule in ("segmentation",) if rule not in scored]
+            extra = ("map_pruned", "segmentation") if self.hparams.offset_evidence else ("segmentation",)
+            choosable = scored + [rule for rule in extra if rule not in scored]
             unknown = [rule for rule in rules if rule not in choosable]
             if unknown:
                 raise ValueError(f"this model discovers by {choosable}, not {unknown}")

@@ -1,0 +1,96 @@
+"""Discovery ``map_pruned``: the exact best segmentation among candidate keyframes, against brute force."""
+
+import itertools
+
+import pytest
+import torch
+
+from keyin.decode.rules import keyin_keyframes, map_keyframes
+from keyin.decode.segment_costs import candidate_segments, interpolation_costs
+from keyin.models import ConvDecoder, Interpolator
+
+
+def covers(chosen: tuple[int, ...], length: int, max_offset: int, n_keyframes: int) -> bool:
+    """Whether keyframes at future positions ``chosen`` cut 0 … length into at most M gaps of at most S."""
+    edges = [0, *(p + 1 for p in chosen), length]
+    return len(edges) - 1 <= n_keyframes and max(b - a for a, b in zip(edges[:-1], edges[1:])) <= max_offset
+
+
+def test_candidate_segments_match_a_brute_force():
+    generator = torch.Generator().manual_seed(0)
+    n_future, max_offset, n_keyframes = 7, 3, 3
+    candidates = torch.rand(40, n_future, generator=generator) < 0.4
+    keep = candidate_segments(candidates, max_offset, n_keyframes)
+    assert keep.shape == (40, n_future, max_offset)
+    for b in range(40):
+        allowed = {0, n_future} | {p + 1 for p in range(n_future - 1) if candidates[b, p]}
+        feasible = any(covers(chosen, n_future, max_offset, n_keyframes)
+                       for size in range(n_keyframes) for chosen in itertools.combinations(sorted(allowed - {0, n_future}), size)
+                       for chosen in [tuple(k - 1 for k in chosen)])
+        for start in range(n_future):
+            for offset in range(1, max_offset + 1):
+                inside = start + offset <= n_future
+                expected = inside and (not feasible or (start in allowed and start + offset in allowed))
+                assert bool(keep[b, start, offset - 1]) == expected, (b, start, offset)
+
+
+def test_pruned_costs_are_the_full_costs_of_the_kept_segments():
+    torch.manual_seed(1)
+    interpolator = Interpolator(8, 4, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, 8, norm="none").eval()
+    boundary_emb, frames = torch.rand(3, 9, 8), torch.rand(3, 8, 64)
+    keep = candidate_segments(torch.rand(3, 8) < 0.5, 4, 4)
+    full = interpolation_costs(interpolator, decoder, boundary_emb, frames)
+    pruned = interpolation_costs(interpolator, decoder, boundary_emb, frames, keep=keep, chunk=5)
+    torch.testing.assert_close(pruned[keep], full[keep])
+    assert torch.isinf(pruned[~keep]).all()
+
+
+def test_map_among_candidates_is_the_best_segmentation_whose_keyframes_are_candidates():
+    """Brute force over every keyframe set inside the candidates (every set where none covers the clip),
+    clips of two lengths; the same keyframes from precomputed costs, masked."""
+    torch.manual_seed(2)
+    n_future, max_offset, n_keyframes, embed_dim = 7, 3, 4, 8
+    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
+    boundary_emb = torch.rand(6, n_future + 1, embed_dim)
+    frames = (torch.rand(6, n_future, 64) > 0.5).float()
+    scores = torch.randn(6, n_future) * 20
+    candidates = torch.rand(6, n_future) < 0.5
+    candidates[0] = False  # no candidate: no segmentation of 7 frames with gaps ≤ 3 → every frame may be one
+    lengths = torch.tensor([7, 7, 7, 5, 5, 7])
+    price, weight = 30.0, 2.0
+    decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, lengths, n_keyframes, price, scores, weight,
+                            candidates=candidates)
+    bce = interpolation_costs(interpolator, decoder, boundary_emb, frames)
+    from_costs = map_keyframes(interpolator, decoder, boundary_emb, frames, lengths, n_keyframes, price, scores, weight,
+                               costs=bce, candidates=candidates)
+    assert from_costs == decoded
+    for b, length in enumerate(lengths.tolist()):
+        sets = [chosen for size in range(n_keyframes) for chosen in itertools.combinations(range(length - 1), size)
+                if covers(chosen, length, max_offset, n_keyframes)]
+        inside = [chosen for chosen in sets if all(candidates[b, p] for p in chosen)]
+        expected_total, expected = float("inf"), None
+        for chosen in inside or sets:
+            edges = [0, *(p + 1 for p in chosen), length]
+            total = sum(float(bce[b, left, right - left - 1]) + price for left, right in zip(edges[:-1], edges[1:]))
+            total -= weight * sum(float(scores[b, p]) for p in chosen)
+            if total < expected_total:
+                expected_total, expected = total, list(chosen)
+        assert decoded[b] == expected, b
+    assert not any(candidates[0]) and decoded[0]  # the fallback found keyframes all the same
+
+
+def test_map_pruned_needs_boundary_scores_and_keeps_maps_keyframes_when_every_frame_is_a_candidate():
+    from tests.planning.trained_models import keyframe_module
+
+    clips, lengths = torch.rand(4, 7, 3, 16, 16), torch.tensor([6, 6, 4, 6])
+    plain = keyframe_module().eval()
+    with pytest.raises(ValueError, match="boundary scores"):
+        keyin_keyframes(plain.model, clips, lengths, "map_pruned")
+    with pytest.raises(ValueError, match="needs offset_evidence"):
+        keyframe_module(discovery="map_pruned")
+    module = keyframe_module(offset_evidence=True, discovery="map_pruned").eval()
+    exact = module.discover(clips, lengths, "map", keyframe_cost=5.0)
+    assert keyin_keyframes(module.model, clips, lengths, "map_pruned", 5.0, candidate_logit=-float("inf")) == exact
+    assert set(module.discoverers("keyin_plus", ["map", "map_pruned"])) == {"keyin_plus_map", "keyin_plus"}
