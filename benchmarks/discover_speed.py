@@ -14,8 +14,9 @@ the rule keyin-discover's ``auto`` falls back to) through
 the functions that path calls: decoding (PyAV and fitting, of the clip written as an mp4),
 ``KEYIN.keyframes`` (encoder and posterior, run by the rule and by the score), the interpolator's
 segment costs (per window, or once per video for all its windows: ``video_costs``, keyin-discover's
-path for map and segmentation), the DP, and the files (JSON and pictures). ``--per-window`` also runs
-map with each window computing its own segment costs (the path before the windows shared them).
+path for map, map_pruned and segmentation; map_pruned's only for the segments its windows price), the DP,
+and the files (JSON and pictures). ``--per-window`` also runs those rules with each window computing its own
+segment costs (the path before the windows shared them) and checks that the keyframes are the same.
 """
 
 from __future__ import annotations
@@ -139,8 +140,9 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
     with timed_parts() as parts:
         video_costs = module.video_costs if shared else None  # the timed method
         started = time.perf_counter()
+        segments = module.map_pruned_segments if shared and rule == "map_pruned" else None
         summary = discover_videos(videos, discoverer, module.keyframe_probabilities, folder, {}, n_cond,
-                                  n_future, 1, n_future // 2, progress=False, video_costs=video_costs)
+                                  n_future, 1, n_future // 2, progress=False, video_costs=video_costs, segments=segments)
         total = time.perf_counter() - started
     record = json.loads((folder / summary["videos"]["clip.npy"]["folder"] / "keyframes.json").read_text())
     found = [keyframe["frame"] for keyframe in record["keyframes"]]

@@ -130,6 +130,7 @@ def discover(cfg: DictConfig) -> dict:
         videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
         stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress, pictures=bool(cfg.pictures),
         video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
+        segments=module.map_pruned_segments if model["rule"] == "map_pruned" else None,
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
     write_metrics(summary, run_dir())

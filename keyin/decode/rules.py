@@ -21,7 +21,7 @@ from keyin.models.keyin import KEYIN
 
 KEYIN_RULES = ("offsets", "boundaries", "map", "map_pruned", "segmentation")
 VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
-SEGMENT_COST_RULES = ("map", "segmentation")  # the rules that read the interpolation BCE of every segment
+SEGMENT_COST_RULES = ("map", "map_pruned", "segmentation")  # the rules that read the segments' interpolation BCE
 BOUNDARY_SCORE_RULES = ("boundaries", "map_pruned")  # the rules that read stage 2's boundary scores (offset_evidence)
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
 # posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every segment's frames (~7 ms
@@ -87,7 +87,7 @@ def map_keyframes(
     boundary_weight: float = 0.0,
     weights: Tensor | None = None,
     costs: Tensor | None = None,
-    candidates: Tensor | None = None,
+    keep: Tensor | None = None,
 ) -> list[list[int]]:
     """The most likely keyframes given the frames: interpolation BCE, a price per keyframe and,
     optionally, the keyframe predictor's boundary scores as a prior.
@@ -102,8 +102,8 @@ def map_keyframes(
         weights: (B, N, D) pixel weights of the frames, None for the plain BCE.
         costs: (B, N, S) the clips' interpolation BCE if already known (windows of one video share
             them: :func:`keyin.decode.segment_costs.window_costs`), else None.
-        candidates: (B, N) bool, the frames that may be keyframes (:func:`candidate_segments`: only
-            the segments between them are priced, so only their frames are rendered), None for all.
+        keep: (B, N, S) bool, the only segments it may use (:func:`map_pruned_segments`: only their
+            frames are rendered), None for all.
     Returns:
         Per clip, the interior keyframe positions.
     """
@@ -115,15 +115,15 @@ def map_keyframes(
 
     def segment_costs(rows: Tensor, length: int) -> Tensor:
         rows = rows.to(boundary_emb.device)
-        keep = None if candidates is None else candidate_segments(candidates[rows.to(candidates.device), :length], max_offset, n_keyframes)
+        kept = None if keep is None else keep[rows.to(keep.device), :length]
         if costs is None:
             bce = interpolation_costs(
                 interpolator, decoder, boundary_emb[rows, : length + 1], frames[rows, :length],
-                None if weights is None else weights[rows, :length], keep=keep,
+                None if weights is None else weights[rows, :length], keep=kept,
             )
         else:
             bce = costs[rows.to(costs.device), :length]
-            bce = bce if keep is None else bce.masked_fill(~keep.to(bce.device), float("inf"))
+            bce = bce if kept is None else bce.masked_fill(~kept.to(bce.device), float("inf"))
         if scores is not None and boundary_weight:
             bce = bce + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset).to(bce.device)
         return bce  # best_segmentation moves it to the CPU
@@ -201,7 +201,7 @@ def keyin_keyframes(
     # the posterior mean, its offset evidence read along the argmax path (what the readout reads)
     embeddings, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
     if costs is not None and rule not in SEGMENT_COST_RULES:
-        raise ValueError(f"rule {rule!r} takes no precomputed segment costs; pass costs only with {SEGMENT_COST_RULES}")
+        raise ValueError(f"rule {rule!r} reads no segment costs; pass costs only with {SEGMENT_COST_RULES}")
     if rule in BOUNDARY_SCORE_RULES and keys.boundary_scores is None:
         raise ValueError(f"rule {rule!r} needs the boundary scores of offset_evidence")
     if rule == "offsets":
@@ -214,9 +214,32 @@ def keyin_keyframes(
             model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
             future_length, model.predictor.n_keyframes, keyframe_cost,
             None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
-            costs=costs, candidates=keys.boundary_scores >= candidate_logit if rule == "map_pruned" else None,
+            costs=costs, keep=_candidate_keep(keys.boundary_scores, lengths, candidate_logit, model) if rule == "map_pruned" else None,
         )
     return with_sequence_ends(interior, lengths, n_future)
+
+
+def _candidate_keep(boundary_scores: Tensor, lengths: Tensor, candidate_logit: float, model: KEYIN) -> Tensor:
+    """(B, N, S) the segments ``map_pruned`` prices: between frames whose boundary logit is ≥ ``candidate_logit``."""
+    return candidate_segments(boundary_scores >= candidate_logit, lengths, model.predictor.max_offset,
+                              model.predictor.n_keyframes)
+
+
+@torch.no_grad()
+def map_pruned_segments(model: KEYIN, clips: Tensor, future_length: Tensor, candidate_logit: float) -> Tensor:
+    """The segments ``map_pruned`` prices in each clip, read as :func:`keyin_keyframes` reads them
+    (keyin-discover renders the union over a video's windows once).
+
+    Args:
+        model: a trained :class:`keyin.models.KEYIN` with offset evidence, in eval mode.
+        clips: (B, L, C, H, W) in [0, 1]; future_length: (B,) valid future frames.
+    Returns:
+        (B, N, S) bool (:func:`keyin.decode.segment_costs.candidate_segments`).
+    """
+    _, keys = model.keyframes(clips, future_length, mode="posterior", sample=False, chain="argmax")
+    if keys.boundary_scores is None:
+        raise ValueError("rule 'map_pruned' needs the boundary scores of offset_evidence")
+    return _candidate_keep(keys.boundary_scores, future_length, candidate_logit, model)
 
 
 @torch.no_grad()

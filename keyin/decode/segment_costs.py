@@ -87,7 +87,12 @@ def interpolation_costs(
 
 @torch.no_grad()
 def video_interpolation_costs(
-    interpolator: torch.nn.Module, decoder: torch.nn.Module, embeddings: Tensor, frames: Tensor, block: int = 256
+    interpolator: torch.nn.Module,
+    decoder: torch.nn.Module,
+    embeddings: Tensor,
+    frames: Tensor,
+    block: int = 256,
+    keep: Tensor | None = None,
 ) -> Tensor:
     """:func:`interpolation_costs` of every segment of a whole video, for windows to share.
 
@@ -99,6 +104,7 @@ def video_interpolation_costs(
         embeddings: (T, E) the encoder's embedding of every kept frame, T ≥ 2.
         frames: (T, D) those frames, flattened: in [0, 1], or uint8 (0-255, turned into [0, 1] a block at
             a time on the embeddings' device, so that a long video's pixels stay small).
+        keep: (T - 1, S) bool, only the segments marked (the others stay ``inf``); None: all.
     Returns:
         (T - 1, S) the cost of the segment from frame ``t`` to frame ``t + o + 1`` at ``[t, o]``,
         ``inf`` where it leaves the video.
@@ -106,46 +112,58 @@ def video_interpolation_costs(
     n_frames, max_offset = len(embeddings), interpolator.max_offset
     if n_frames < 2 or len(frames) != n_frames:
         raise ValueError(f"a video's segment costs need T ≥ 2 embeddings and as many frames, got {n_frames} and {len(frames)}")
+    if keep is not None and keep.shape != (n_frames - 1, max_offset):
+        raise ValueError(f"keep must be (T - 1, S) = {(n_frames - 1, max_offset)}, got {tuple(keep.shape)}")
     costs = []
     for first in range(0, n_frames - 1, block):
         last = min(first + block + max_offset, n_frames)  # the block's starts and the frames they reach
+        if keep is not None and not keep[first : first + block].any():
+            costs.append(embeddings.new_full((min(block, n_frames - 1 - first), max_offset), float("inf")))
+            continue
         pixels = frames[first + 1 : last].to(embeddings.device)
         pixels = pixels.float().div_(255.0) if pixels.dtype == torch.uint8 else pixels
-        part = interpolation_costs(interpolator, decoder, embeddings[None, first:last], pixels[None], n_starts=block)
+        block_keep = None
+        if keep is not None:  # the block's rows of keep, on its own (last - first - 1) starts
+            block_keep = keep.new_zeros(1, last - first - 1, max_offset)
+            block_keep[0, : min(block, n_frames - 1 - first)] = keep[first : first + block]
+        part = interpolation_costs(interpolator, decoder, embeddings[None, first:last], pixels[None], n_starts=block,
+                                   keep=block_keep)
         costs.append(part[0, :block])
     return torch.cat(costs)
 
 
-def candidate_segments(candidates: Tensor, max_offset: int, n_keyframes: int) -> Tensor:
+def candidate_segments(candidates: Tensor, lengths: Tensor, max_offset: int, n_keyframes: int) -> Tensor:
     """The segments a segmentation may use when each of its keyframes must be a candidate frame.
 
-    The clip's start (K^0) and closing boundary (its last frame) are always boundaries. A clip whose
-    candidates admit no segmentation into at most M gaps of at most S keeps every segment, so that
-    its best segmentation is the unrestricted one.
+    Each clip's start (K^0) and closing boundary (its last valid frame) are always boundaries. A clip
+    whose candidates admit no segmentation into at most M gaps of at most S keeps every segment, so
+    that its best segmentation is the unrestricted one.
 
     Args:
         candidates: (B, N) bool, the future positions that may be keyframes.
+        lengths: (B,) valid future frames, each ≥ 1.
         max_offset: S; n_keyframes: M.
     Returns:
         (B, N, S) bool: ``[b, a, o - 1]`` whether the segment from extended index ``a`` to ``a + o``
-        lies in the clip and both its ends may be boundaries.
+        lies in the clip's valid frames and both its ends may be boundaries.
     """
     batch, n_future = candidates.shape
     device = candidates.device
-    always = torch.ones(batch, 1, dtype=torch.bool, device=device)
-    allowed = torch.cat([always, candidates[:, :-1].bool(), always], dim=1)  # (B, N + 1) on the extended index
-    start = torch.arange(n_future, device=device)[:, None]
-    end = start + torch.arange(1, max_offset + 1, device=device)  # (N, S)
-    keep = allowed[:, :n_future, None] & allowed[:, end.clamp(max=n_future)] & (end <= n_future)
+    lengths = lengths.to(device)
+    index = torch.arange(n_future + 1, device=device)  # the extended index
+    allowed = torch.cat([candidates.new_ones(batch, 1), candidates.bool()], dim=1)  # (B, N + 1)
+    allowed = (allowed & (index < lengths[:, None])) | (index == lengths[:, None])
+    end = torch.arange(n_future, device=device)[:, None] + torch.arange(1, max_offset + 1, device=device)  # (N, S)
+    inside = end[None] <= lengths[:, None, None]  # (B, N, S)
+    keep = allowed[:, :n_future, None] & allowed[:, end.clamp(max=n_future)] & inside
     fewest = torch.full((batch, n_future + 1), n_future + 1, dtype=torch.long, device=device)  # fewest gaps to reach k
     fewest[:, 0] = 0
     for k in range(1, n_future + 1):
         offsets = torch.arange(1, min(max_offset, k) + 1, device=device)
         reached = torch.where(keep[:, k - offsets, offsets - 1], fewest[:, k - offsets] + 1, n_future + 1)
         fewest[:, k] = reached.min(dim=1).values
-    infeasible = fewest[:, n_future] > n_keyframes
-    keep[infeasible] = end[None] <= n_future
-    return keep
+    infeasible = fewest.gather(1, lengths[:, None]).squeeze(1) > n_keyframes
+    return torch.where(infeasible[:, None, None], inside, keep)
 
 
 def window_costs(video_costs: Tensor, firsts: Tensor, lengths: Tensor, n_future: int) -> Tensor:

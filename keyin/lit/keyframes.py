@@ -21,6 +21,7 @@ from keyin.decode.rules import (
     VARIANT_RULES,
     keyin_keyframe_probabilities,
     keyin_keyframes,
+    map_pruned_segments,
 )
 from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KNEE, KeyframeCost
@@ -200,13 +201,22 @@ class KeyframeModule(L.LightningModule):
             )
 
     @torch.no_grad()
-    def video_costs(self, frames: torch.Tensor, block: int = 256) -> torch.Tensor | None:
+    def map_pruned_segments(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
+        """(B, N, S) the segments ``map_pruned`` prices in each of (B, L, C, H, W) clips
+        (:func:`keyin.decode.rules.map_pruned_segments`)."""
+        with evaluating(self):
+            return map_pruned_segments(self.model, clips.to(self.device), future_length.to(self.device),
+                                       self.hparams.map_candidate_logit)
+
+    @torch.no_grad()
+    def video_costs(self, frames: torch.Tensor, keep: torch.Tensor | None = None, block: int = 256) -> torch.Tensor | None:
         """The interpolation BCE of every segment of a whole video, which all its windows share
         (:func:`keyin.decode.segment_costs.video_interpolation_costs`); None where the BCE weighs
         pixels by their change within a window (``foreground_weight``), so that windows differ.
 
         Args:
             frames: (T, H, W, C) uint8, the video's kept frames at the model's size.
+            keep: (T - 1, S) bool, only these segments (the others ``inf``); None: all.
         Returns:
             (T - 1, S) on the module's device, or None.
         """
@@ -218,7 +228,8 @@ class KeyframeModule(L.LightningModule):
             for first in range(0, len(frames), block):
                 chunk = pixels[first : first + block].to(self.device).float().div_(255.0)
                 embeddings.append(self.model.encoder(chunk.view(1, -1, *self.model.encoder.image_shape))[0])
-            return video_interpolation_costs(self.model.interpolator, self.model.decoder, torch.cat(embeddings), pixels, block)
+            return video_interpolation_costs(self.model.interpolator, self.model.decoder, torch.cat(embeddings), pixels,
+                                             block, None if keep is None else keep.to(self.device))
 
     @torch.no_grad()
     def keyframe_probabilities(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:

@@ -31,7 +31,8 @@ from keyin.io import atomic_write_text, remove_stale_temporaries, replace_folder
 from keyin.viz.discovered import save_annotated_gif, save_contact_sheet, save_timeline
 
 Discoverer = Callable[..., list[list[int]]]  # (B, L, C, H, W), (B,)[, costs=(B, N, S)] -> per clip, future positions
-VideoCosts = Callable[[Tensor], Tensor | None]  # (T, H, W, C) uint8 -> (T - 1, S) segment costs, or None
+VideoCosts = Callable[[Tensor, Tensor | None], Tensor | None]  # (T, H, W, C) uint8, (T - 1, S) kept -> (T - 1, S) costs, or None
+Segments = Callable[[Tensor, Tensor], Tensor]  # (B, L, C, H, W), (B,) -> (B, N, S) the segments a window prices
 Scorer = Callable[[Tensor, Tensor], Tensor]  # (B, L, C, H, W), (B,) -> (B, N) a score per future position
 FILES = ("keyframes.json", "contact_sheet.png", "timeline.png", "annotated.gif")
 SCORE = ("the probability of a keyframe at this frame under the model's posterior offsets, read along "
@@ -60,6 +61,20 @@ def window_batches(
         yield starts, torch.stack([i["frames"] for i in items]), torch.stack([i["future_length"] for i in items])
 
 
+def video_segments(video: ImportedVideo, segments: Segments, n_cond: int, n_future: int, batch_size: int) -> Tensor:
+    """(T - 1, S) bool on the video's kept frames: the segments that any of its windows prices
+    (``segments`` per window; row ``t`` starts at kept frame ``t``, as in :func:`window_costs`)."""
+    counts = None
+    for starts, clips, future_length in window_batches(video, n_cond, n_future, batch_size):
+        keep = segments(clips, future_length).cpu()  # (B, N, S)
+        if counts is None:
+            counts = torch.zeros(len(video.frames) - 1, keep.shape[2], dtype=torch.long)
+        firsts = torch.tensor(starts) + n_cond - 1  # each window's extended index 0 on the video
+        rows = (firsts[:, None] + torch.arange(n_future)).clamp(max=len(counts) - 1)  # padded rows keep nothing
+        counts.index_put_((rows.flatten(),), keep.flatten(0, 1).long(), accumulate=True)
+    return counts > 0
+
+
 @torch.no_grad()
 def discover_video(
     video: ImportedVideo,
@@ -72,6 +87,7 @@ def discover_video(
     batch_size: int = 32,
     advance: Callable[[int], Any] = lambda windows: None,
     video_costs: VideoCosts | None = None,
+    segments: Segments | None = None,
 ) -> list[Keyframe]:
     """The keyframes of one video: every window's, merged (:func:`keyin.decode.merge.merge_windows`),
     mapped to the original video's frames (:func:`keyin.data.windows.original_frame`) and seconds.
@@ -83,8 +99,11 @@ def discover_video(
         advance: called with the number of windows done after each batch (a progress bar).
         video_costs: the segment costs of the whole video, computed once for the overlapping windows
             and passed to ``discoverer`` as each window's ``costs``; None (or it returns None): none.
+        segments: with ``video_costs``, the segments each window prices (a pruned rule): the video's
+            costs are computed for their union only; None: every segment.
     """
-    shared = None if video_costs is None else video_costs(torch.from_numpy(video.frames))
+    keep = None if video_costs is None or segments is None else video_segments(video, segments, n_cond, n_future, batch_size)
+    shared = None if video_costs is None else video_costs(torch.from_numpy(video.frames), keep)
     windows = []
     for starts, clips, future_length in window_batches(video, n_cond, n_future, batch_size):
         if shared is None:
@@ -197,6 +216,7 @@ def discover_videos(
     progress: bool = True,
     pictures: bool = True,
     video_costs: VideoCosts | None = None,
+    segments: Segments | None = None,
 ) -> dict[str, Any]:
     """Discover every video's keyframes and write its folder ``<folder>/<video name>/`` (keyframes.json,
     and with ``pictures`` the contact sheet, timeline and annotated GIF).
@@ -204,7 +224,7 @@ def discover_videos(
     Args:
         model: what ``keyframes.json`` says about the model (checkpoint, method, rule, sizes).
         window_stride: kept frames between window starts (recorded; the starts are the videos').
-        video_costs: see :func:`discover_video`.
+        video_costs, segments: see :func:`discover_video`.
     Returns:
         A summary: videos, each one's folder and keyframe count, kept frames and windows run,
         seconds and kept frames per second.
@@ -218,7 +238,7 @@ def discover_videos(
         for video, name in zip(videos, folder_names([video.id for video in videos]), strict=True):
             keyframes = discover_video(
                 video, discoverer, scorer, n_cond, n_future, frame_stride, seam, batch_size,
-                advance=lambda windows: bar.update(task, advance=windows), video_costs=video_costs,
+                advance=lambda windows: bar.update(task, advance=windows), video_costs=video_costs, segments=segments,
             )
             record = keyframes_record(video, keyframes, model, n_cond, frame_stride, window_stride)
             write_video_folder(folder / name, video, keyframes, record, n_cond, frame_stride, pictures)

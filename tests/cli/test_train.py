@@ -88,7 +88,7 @@ def test_eval_scores_the_chosen_rules_on_the_first_clips(trained):
     assert len((root / "eval_map" / "per_video.csv").read_text().splitlines()) == 1 + 3  # generated clips: one video each
     bad = run("eval", "ckpt=run/checkpoints/keyframes/last.ckpt", "discovery=viterbi", "progress=false", cwd=root)
     assert error_line(bad) == (
-        "error: discovery=viterbi: this model discovers by ['offsets', 'boundaries', 'map', 'segmentation'], not ['viterbi']; pick among those")
+        "error: discovery=viterbi: this model discovers by ['offsets', 'boundaries', 'map', 'map_pruned', 'segmentation'], not ['viterbi']; pick among those")
 
 
 def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):

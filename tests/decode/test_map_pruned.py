@@ -20,16 +20,17 @@ def test_candidate_segments_match_a_brute_force():
     generator = torch.Generator().manual_seed(0)
     n_future, max_offset, n_keyframes = 7, 3, 3
     candidates = torch.rand(40, n_future, generator=generator) < 0.4
-    keep = candidate_segments(candidates, max_offset, n_keyframes)
+    lengths = torch.randint(1, n_future + 1, (40,), generator=generator)
+    keep = candidate_segments(candidates, lengths, max_offset, n_keyframes)
     assert keep.shape == (40, n_future, max_offset)
-    for b in range(40):
-        allowed = {0, n_future} | {p + 1 for p in range(n_future - 1) if candidates[b, p]}
-        feasible = any(covers(chosen, n_future, max_offset, n_keyframes)
-                       for size in range(n_keyframes) for chosen in itertools.combinations(sorted(allowed - {0, n_future}), size)
-                       for chosen in [tuple(k - 1 for k in chosen)])
+    for b, length in enumerate(lengths.tolist()):
+        interior = [p for p in range(length - 1) if candidates[b, p]]  # the closing frame is a boundary anyway
+        allowed = {0, length} | {p + 1 for p in interior}
+        feasible = any(covers(chosen, length, max_offset, n_keyframes)
+                       for size in range(n_keyframes) for chosen in itertools.combinations(interior, size))
         for start in range(n_future):
             for offset in range(1, max_offset + 1):
-                inside = start + offset <= n_future
+                inside = start + offset <= length
                 expected = inside and (not feasible or (start in allowed and start + offset in allowed))
                 assert bool(keep[b, start, offset - 1]) == expected, (b, start, offset)
 
@@ -39,11 +40,28 @@ def test_pruned_costs_are_the_full_costs_of_the_kept_segments():
     interpolator = Interpolator(8, 4, 0, 16, 1, 16).eval()
     decoder = ConvDecoder(8, 1, 4, 8, norm="none").eval()
     boundary_emb, frames = torch.rand(3, 9, 8), torch.rand(3, 8, 64)
-    keep = candidate_segments(torch.rand(3, 8) < 0.5, 4, 4)
+    keep = candidate_segments(torch.rand(3, 8) < 0.5, torch.tensor([8, 8, 6]), 4, 4)
     full = interpolation_costs(interpolator, decoder, boundary_emb, frames)
     pruned = interpolation_costs(interpolator, decoder, boundary_emb, frames, keep=keep, chunk=5)
     torch.testing.assert_close(pruned[keep], full[keep])
     assert torch.isinf(pruned[~keep]).all()
+
+
+def test_a_videos_pruned_costs_in_blocks_are_its_full_costs_of_the_kept_segments():
+    from keyin.decode.segment_costs import video_interpolation_costs
+
+    torch.manual_seed(3)
+    interpolator = Interpolator(8, 4, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, 8, norm="none").eval()
+    embeddings, frames = torch.rand(23, 8), torch.randint(0, 256, (23, 64), dtype=torch.uint8)
+    keep = torch.rand(22, 4) < 0.3
+    keep[5:10] = False  # a block with nothing to render
+    full = video_interpolation_costs(interpolator, decoder, embeddings, frames, block=5)
+    pruned = video_interpolation_costs(interpolator, decoder, embeddings, frames, block=5, keep=keep)
+    torch.testing.assert_close(pruned[keep], full[keep])
+    assert torch.isinf(pruned[~keep]).all()
+    with pytest.raises(ValueError, match="keep must be"):
+        video_interpolation_costs(interpolator, decoder, embeddings, frames, keep=keep[:-1])
 
 
 def test_map_among_candidates_is_the_best_segmentation_whose_keyframes_are_candidates():
@@ -60,11 +78,12 @@ def test_map_among_candidates_is_the_best_segmentation_whose_keyframes_are_candi
     candidates[0] = False  # no candidate: no segmentation of 7 frames with gaps ≤ 3 → every frame may be one
     lengths = torch.tensor([7, 7, 7, 5, 5, 7])
     price, weight = 30.0, 2.0
+    keep = candidate_segments(candidates, lengths, max_offset, n_keyframes)
     decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, lengths, n_keyframes, price, scores, weight,
-                            candidates=candidates)
+                            keep=keep)
     bce = interpolation_costs(interpolator, decoder, boundary_emb, frames)
     from_costs = map_keyframes(interpolator, decoder, boundary_emb, frames, lengths, n_keyframes, price, scores, weight,
-                               costs=bce, candidates=candidates)
+                               costs=bce, keep=keep)
     assert from_costs == decoded
     for b, length in enumerate(lengths.tolist()):
         sets = [chosen for size in range(n_keyframes) for chosen in itertools.combinations(range(length - 1), size)

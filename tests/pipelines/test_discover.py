@@ -13,7 +13,7 @@ from keyin.data.imports import ImportSpec, read_videos
 from keyin.data.sources import decoded_frames
 from keyin.data.windows import kept_keyframes
 from keyin.pipelines import discover
-from keyin.pipelines.discover import FILES, discover_video, discover_videos, folder_names
+from keyin.pipelines.discover import FILES, discover_video, discover_videos, folder_names, window_batches
 from tests.videos import EVENTS, FPS, LEVEL0, LEVEL_STEP, frame_numbers, frames, write_video
 
 N_COND, N_FUTURE = 2, 10
@@ -143,6 +143,43 @@ def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_
             inside = torch.arange(n_future)[:, None] + offsets <= length  # (N, S): the segment ends in the window
             assert torch.equal(torch.isfinite(costs[row]), inside)
             torch.testing.assert_close(costs[row][inside], own[row][inside])
+
+
+def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(tmp_path):
+    """keyin-discover renders the union of the windows' pruned segments once per video: the keyframes are
+    those of every window pruning and pricing its own, and each window receives the costs of its own
+    segments (brute force: computed from the window alone)."""
+    from keyin.decode.segment_costs import interpolation_costs
+    from tests.lit.test_keyframe_teacher import keyframe_module
+
+    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map_pruned")
+    np.save(tmp_path / "noise.npy", np.random.default_rng(1).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
+    n_future = module.hparams.stage1["n_future"]
+    windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
+    (video,), _, _ = read_videos(tmp_path / "noise.npy", windows, None, None, progress=False)
+    clips = next(iter(window_batches(video, N_COND, n_future, 64)))[1]
+    _, keys = module.model.eval().keyframes(clips, torch.full((len(clips),), n_future), mode="posterior", sample=False,
+                                            chain="argmax")
+    module.hparams.map_candidate_logit = float(keys.boundary_scores.detach().median())  # about half the frames are candidates
+    received = []
+
+    def discoverer(clips, future_length, costs=None):
+        received.append((clips, future_length, costs))
+        return module.discover(clips, future_length, keyframe_cost=20.0, costs=costs)
+
+    args = (video, discoverer, module.keyframe_probabilities, N_COND, n_future, 1)
+    alone = discover_video(*args, batch_size=4)
+    received.clear()
+    shared = discover_video(*args, batch_size=4, video_costs=module.video_costs, segments=module.map_pruned_segments)
+    assert len(alone) > 3 and shared == alone
+    model, pruned = module.model, 0
+    for clips, lengths, costs in received:
+        keep = module.map_pruned_segments(clips, lengths)
+        own = interpolation_costs(model.interpolator, model.decoder, model.encoder(clips)[:, N_COND - 1 :],
+                                  clips[:, N_COND:].flatten(2))
+        torch.testing.assert_close(costs[keep], own[keep])
+        pruned += int((torch.isfinite(own) & ~keep).sum())
+    assert pruned > 0  # the windows did leave segments out
 
 
 def test_window_relative_pixel_weights_keep_each_windows_own_costs():
