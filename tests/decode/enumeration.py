@@ -36,3 +36,37 @@ def brute_force(costs: torch.Tensor, n_keyframes: int, keyframe_cost: float = 0.
     by_count = cheapest_by_count(costs, n_keyframes)
     best = min(by_count, key=lambda m: by_count[m][0] + m * keyframe_cost)
     return by_count[best][0] + best * keyframe_cost, by_count[best][1]
+
+
+def keyframe_sets(length: int, max_offset: int, n_keyframes: int) -> list[tuple[int, ...]]:
+    """Every set of interior keyframe positions that cuts 0 … length into at most M gaps of at most S."""
+    def covers(chosen: tuple[int, ...]) -> bool:
+        edges = [0, *(p + 1 for p in chosen), length]
+        return max(b - a for a, b in zip(edges[:-1], edges[1:])) <= max_offset
+
+    return [chosen for size in range(n_keyframes) for chosen in itertools.combinations(range(length - 1), size)
+            if covers(chosen)]
+
+
+def cheapest_keyframes(bce: torch.Tensor, scores: torch.Tensor, sets: list[tuple[int, ...]], length: int,
+                       price: float, weight: float) -> list[int]:
+    """Of ``sets``, the keyframes of least summed segment BCE (N, S) + ``price`` per gap − ``weight`` · scores (N,)."""
+    def total(chosen: tuple[int, ...]) -> float:
+        edges = [0, *(p + 1 for p in chosen), length]
+        cost = sum(float(bce[left, right - left - 1]) + price for left, right in zip(edges[:-1], edges[1:]))
+        return cost - weight * sum(float(scores[p]) for p in chosen)
+
+    return list(min(sets, key=total))
+
+
+def random_map_inputs(batch: int, n_future: int, max_offset: int, seed: int, embed_dim: int = 8):
+    """An untrained interpolator and decoder, (B, N + 1, E) boundary embeddings, (B, N, 64) binary frames
+    and (B, N) boundary scores, for brute-force checks of ``map``."""
+    from keyin.models import ConvDecoder, Interpolator
+
+    torch.manual_seed(seed)
+    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
+    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
+    boundary_emb = torch.rand(batch, n_future + 1, embed_dim)
+    frames = (torch.rand(batch, n_future, 64) > 0.5).float()
+    return interpolator, decoder, boundary_emb, frames, torch.randn(batch, n_future) * 20

@@ -8,7 +8,7 @@ from keyin.decode.segment_costs import interpolation_costs
 from keyin.decode.segmentation import best_segmentation, path_cost, segmentation_offsets
 from keyin.losses.soft_keyframe import IGNORE_OFFSET, offset_teacher_loss
 from keyin.models import ConvDecoder, Interpolator
-from tests.decode.enumeration import brute_force, outside_the_clip
+from tests.decode.enumeration import brute_force, cheapest_keyframes, keyframe_sets, outside_the_clip, random_map_inputs
 
 
 def test_dp_matches_enumeration():
@@ -128,30 +128,15 @@ def test_boundary_keyframes_close_each_clip_at_its_own_length():
 
 
 def test_map_keyframes_minimise_bce_plus_price_minus_boundary_scores():
-    torch.manual_seed(2)
-    n_future, max_offset, n_keyframes, embed_dim = 7, 4, 4, 8
-    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
-    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
-    boundary_emb = torch.rand(3, n_future + 1, embed_dim)
-    frames = (torch.rand(3, n_future, 64) > 0.5).float()
-    scores = torch.randn(3, n_future) * 20
+    n_future, max_offset, n_keyframes = 7, 4, 4
+    interpolator, decoder, boundary_emb, frames, scores = random_map_inputs(3, n_future, max_offset, seed=2)
     price, weight = 30.0, 2.0
     decoded = map_keyframes(interpolator, decoder, boundary_emb, frames, torch.full((3,), n_future),
                             n_keyframes, price, scores, weight)
     bce = interpolation_costs(interpolator, decoder, boundary_emb, frames)
+    sets = keyframe_sets(n_future, max_offset, n_keyframes)
     for b in range(3):
-        expected_total, expected = float("inf"), None
-        for size in range(n_keyframes):
-            for chosen in itertools.combinations(range(n_future - 1), size):
-                edges = [0, *(p + 1 for p in chosen), n_future]
-                gaps = list(zip(edges[:-1], edges[1:]))
-                if max(right - left for left, right in gaps) > max_offset:
-                    continue
-                total = sum(float(bce[b, left, right - left - 1]) + price for left, right in gaps)
-                total -= weight * sum(float(scores[b, p]) for p in chosen)
-                if total < expected_total:
-                    expected_total, expected = total, list(chosen)
-        assert decoded[b] == expected
+        assert decoded[b] == cheapest_keyframes(bce[b], scores[b], sets, n_future, price, weight)
 
 
 def test_map_keyframes_close_each_clip_at_its_own_length():

@@ -1,19 +1,12 @@
 """Discovery ``map_pruned``: the exact best segmentation among candidate keyframes, against brute force."""
 
-import itertools
-
 import pytest
 import torch
 
 from keyin.decode.rules import keyin_keyframes, map_keyframes
 from keyin.decode.segment_costs import candidate_segments, interpolation_costs
 from keyin.models import ConvDecoder, Interpolator
-
-
-def covers(chosen: tuple[int, ...], length: int, max_offset: int, n_keyframes: int) -> bool:
-    """Whether keyframes at future positions ``chosen`` cut 0 … length into at most M gaps of at most S."""
-    edges = [0, *(p + 1 for p in chosen), length]
-    return len(edges) - 1 <= n_keyframes and max(b - a for a, b in zip(edges[:-1], edges[1:])) <= max_offset
+from tests.decode.enumeration import cheapest_keyframes, keyframe_sets, random_map_inputs
 
 
 def test_candidate_segments_match_a_brute_force():
@@ -26,8 +19,7 @@ def test_candidate_segments_match_a_brute_force():
     for b, length in enumerate(lengths.tolist()):
         interior = [p for p in range(length - 1) if candidates[b, p]]  # the closing frame is a boundary anyway
         allowed = {0, length} | {p + 1 for p in interior}
-        feasible = any(covers(chosen, length, max_offset, n_keyframes)
-                       for size in range(n_keyframes) for chosen in itertools.combinations(interior, size))
+        feasible = any(set(chosen) <= set(interior) for chosen in keyframe_sets(length, max_offset, n_keyframes))
         for start in range(n_future):
             for offset in range(1, max_offset + 1):
                 inside = start + offset <= length
@@ -67,13 +59,8 @@ def test_a_videos_pruned_costs_in_blocks_are_its_full_costs_of_the_kept_segments
 def test_map_among_candidates_is_the_best_segmentation_whose_keyframes_are_candidates():
     """Brute force over every keyframe set inside the candidates (every set where none covers the clip),
     clips of two lengths; the same keyframes from precomputed costs, masked."""
-    torch.manual_seed(2)
-    n_future, max_offset, n_keyframes, embed_dim = 7, 3, 4, 8
-    interpolator = Interpolator(embed_dim, max_offset, 0, 16, 1, 16).eval()
-    decoder = ConvDecoder(8, 1, 4, embed_dim, norm="none").eval()
-    boundary_emb = torch.rand(6, n_future + 1, embed_dim)
-    frames = (torch.rand(6, n_future, 64) > 0.5).float()
-    scores = torch.randn(6, n_future) * 20
+    n_future, max_offset, n_keyframes = 7, 3, 4
+    interpolator, decoder, boundary_emb, frames, scores = random_map_inputs(6, n_future, max_offset, seed=2)
     candidates = torch.rand(6, n_future) < 0.5
     candidates[0] = False  # no candidate: no segmentation of 7 frames with gaps ≤ 3 → every frame may be one
     lengths = torch.tensor([7, 7, 7, 5, 5, 7])
@@ -86,17 +73,9 @@ def test_map_among_candidates_is_the_best_segmentation_whose_keyframes_are_candi
                                costs=bce, keep=keep)
     assert from_costs == decoded
     for b, length in enumerate(lengths.tolist()):
-        sets = [chosen for size in range(n_keyframes) for chosen in itertools.combinations(range(length - 1), size)
-                if covers(chosen, length, max_offset, n_keyframes)]
+        sets = keyframe_sets(length, max_offset, n_keyframes)
         inside = [chosen for chosen in sets if all(candidates[b, p] for p in chosen)]
-        expected_total, expected = float("inf"), None
-        for chosen in inside or sets:
-            edges = [0, *(p + 1 for p in chosen), length]
-            total = sum(float(bce[b, left, right - left - 1]) + price for left, right in zip(edges[:-1], edges[1:]))
-            total -= weight * sum(float(scores[b, p]) for p in chosen)
-            if total < expected_total:
-                expected_total, expected = total, list(chosen)
-        assert decoded[b] == expected, b
+        assert decoded[b] == cheapest_keyframes(bce[b], scores[b], inside or sets, length, price, weight), b
     assert not any(candidates[0]) and decoded[0]  # the fallback found keyframes all the same
 
 
