@@ -47,6 +47,7 @@ from keyin.cli.app import CONFIG_MODULE
 from keyin.data.brownian import BrownianGenerator
 from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
+from keyin.decode.changepoint import ChangepointKeyframes
 from keyin.decode.rules import BOUNDARY_SCORE_RULES, SEGMENT_COST_RULES
 from keyin.eval.f1 import keyframe_scores
 from keyin.lit.keyframes import KeyframeModule
@@ -154,6 +155,27 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
                 found=len(found), turns=len(inside), f1=scores["f1"], f1_tol1=scores["f1_tol1"])
 
 
+def changepoint_row(clip: Path, turns: list[int], dataset: str) -> str:
+    """The label-free baseline on the same frames: ruptures' PELT over the whole clip at the dataset's
+    settings chosen on its validation clips (``dataset.tuned.changepoint``), its time and F1 on the turns
+    the models are scored on (after the dataset's conditioning frames, before the last frame)."""
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = compose("train", overrides=[f"dataset={dataset}"])
+    settings, n_cond = cfg.dataset.tuned.changepoint, cfg.dataset.n_cond
+    frames = np.load(clip)  # (T, H, W, C) uint8
+    started = time.perf_counter()
+    clips = torch.from_numpy(frames).permute(0, 3, 1, 2)[None].float() / 255.0  # (1, T, C, H, W)
+    detector = ChangepointKeyframes(len(frames), 1, settings.penalty, settings.signal, settings.cost)
+    positions = detector(clips, torch.tensor([len(frames) - 1]))[0]
+    seconds = time.perf_counter() - started
+    found = [p + 1 for p in positions if n_cond <= p + 1 < len(frames) - 1]  # future position p is frame p + 1
+    inside = [t for t in turns if n_cond <= t < len(frames) - 1]
+    scores = keyframe_scores([found], [inside], len(frames))
+    label = f"ruptures PELT on the {settings.signal.replace('_', ' ')} ({settings.cost}, penalty {settings.penalty:g}), no model"
+    return (f"| {label} | {len(frames)} / – | {len(frames) / seconds:.0f} | – | – | – | – | – | – | – | – | "
+            f"{scores['f1']:.3f} / {scores['f1_tol1']:.3f} ({len(found)} found, {len(inside)} labelled) |")
+
+
 def row(result: dict, scored: bool) -> str:
     parts = result["parts"]
     model_seconds = result["total"] - parts.get("files", 0.0)
@@ -189,6 +211,7 @@ def main() -> None:
         models.append((f"trained {config['model']['name']} ({name})", module, config["dataset"]["name"] == args.clip))
     with tempfile.TemporaryDirectory() as tmp:
         clip, movie, turns = long_clip(Path(tmp), args.frames, args.clip, args.data_dir)
+        baseline = changepoint_row(clip, turns, args.clip)
         results = [(run(module, label, rule, clip, movie, turns, Path(tmp), shared), scored)
                    for label, module, scored in models for rule in args.rules
                    for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and plain_bce(module.hparams.stage1) else (True,))
@@ -214,13 +237,15 @@ def main() -> None:
         "segment costs | video segment costs | DP | files | rest | F1 / ±1 F1 of the merged keyframes |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
         *(row(result, scored) for result, scored in results),
+        baseline,
         "",
         "Parts in milliseconds per kept frame. *frames/s (model)*: kept frames over the time from the windows to the "
         "merged keyframes (files excluded); *all*: over decoding, that and writing the JSON and pictures. *decode*: "
         "PyAV decoding of the clip as an mp4 and fitting its frames to the model's size (the discovery itself reads "
         "the lossless .npy of the same clip); *encoder + posterior*: `KEYIN.keyframes`, run once by the rule and once "
         "by the score; *segment costs*: per window (map *per window*); *video segment costs*: once per video, shared by its "
-        "windows (keyin-discover's path; the embeddings of its frames included); *rest*: cutting windows, the merge, Python.",
+        "windows (keyin-discover's path; the embeddings of its frames included); *rest*: cutting windows, the merge, Python. "
+        "The PELT row: its frames/s over the signal and the search, from the frames in memory.",
     ])
     publish(report, args.out)
 
