@@ -81,7 +81,7 @@ def main() -> None:
             if weight:
                 total = total + weight * boundary_segment_costs(scores[clip_rows, :length].float(), max_offset)
             if candidate_logit is not None:
-                keep = candidate_segments(scores[clip_rows, :length] >= candidate_logit, max_offset, n_keys)
+                keep = candidate_segments(scores[clip_rows, :length] >= candidate_logit, lengths[clip_rows], max_offset, n_keys)
                 total = total.masked_fill(~keep, float("inf"))
             return total
 
@@ -115,7 +115,8 @@ def main() -> None:
                 rendered = all_frames = 0.0
                 for length, costs in pixel_costs.items():
                     clip_rows = (lengths == length).nonzero().flatten()
-                    keep = candidate_segments(keys.boundary_scores[clip_rows, :length] >= logit, max_offset, n_keys)
+                    keep = candidate_segments(keys.boundary_scores[clip_rows, :length] >= logit, lengths[clip_rows], max_offset,
+                                              n_keys)
                     inside = torch.isfinite(costs)
                     rendered += float(((keep & inside) * offsets).sum())
                     all_frames += float((inside * offsets).sum())

@@ -17,6 +17,7 @@ from keyin.data.frames import fit_note
 from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
 from keyin.data.labels import check_known, read_labels
 from keyin.decode.rules import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES
+from keyin.losses.image import plain_bce
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
@@ -41,6 +42,10 @@ def check_discover(cfg: DictConfig) -> None:
     nats = isinstance(cost, (int, float)) and not isinstance(cost, bool) and cost >= 0
     if cost is not None and cost != KNEE and not nats:
         raise ConfigError(f"keyframe_cost={cost!r} must be {KNEE} (label-free), nats per keyframe >= 0, or null")
+    logit = cfg.candidate_logit
+    if logit is not None and not (isinstance(logit, (int, float)) and not isinstance(logit, bool)):
+        raise ConfigError(f"candidate_logit={logit!r} must be a number (rule=map_pruned's least boundary logit of a "
+                          f"keyframe, e.g. -4) or null for the checkpoint's")
     for key in ("frame_stride", "batch_size"):
         require_positive_int(cfg[key], key)
     require_int_at_least(cfg.seam, "seam", 0)
@@ -107,8 +112,11 @@ def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> di
         raise ConfigError(f"rule={rule} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
                           f"has not; pass rule=map or rule=offsets")
     cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
+    if cfg.candidate_logit is not None:
+        module.hparams.map_candidate_logit = float(cfg.candidate_logit)
     return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule,
             "keyframe_cost": cost if rule in ("map", "map_pruned") else None,
+            "candidate_logit": module.hparams.map_candidate_logit if rule == "map_pruned" else None,
             **{key: sizes[key] for key in ("image_size", "channels", "n_cond", "n_future")}}
 
 
@@ -130,7 +138,7 @@ def discover(cfg: DictConfig) -> dict:
         videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
         stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress, pictures=bool(cfg.pictures),
         video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
-        segments=module.map_pruned_segments if model["rule"] == "map_pruned" else None,
+        segments=module.map_pruned_segments if model["rule"] == "map_pruned" and plain_bce(module.hparams.stage1) else None,
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
     write_metrics(summary, run_dir())

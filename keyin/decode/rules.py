@@ -123,7 +123,12 @@ def map_keyframes(
             )
         else:
             bce = costs[rows.to(costs.device), :length]
-            bce = bce if kept is None else bce.masked_fill(~kept.to(bce.device), float("inf"))
+            if kept is not None:
+                kept = kept.to(bce.device)
+                if not torch.isfinite(bce[kept]).all():
+                    raise ValueError("costs lack segments that keep prices (inf where a cost is needed): compute "
+                                     "them for at least the kept segments (keyin.pipelines.discover.video_segments)")
+                bce = bce.masked_fill(~kept, float("inf"))
         if scores is not None and boundary_weight:
             bce = bce + boundary_weight * boundary_segment_costs(scores[rows, :length].float(), max_offset).to(bce.device)
         return bce  # best_segmentation moves it to the CPU
@@ -188,10 +193,14 @@ def keyin_keyframes(
             per-frame boundary scores, within M gaps of at most S) or "map" (the exact best
             segmentation under the frozen interpolator's pixel BCE with ``keyframe_cost`` per
             keyframe, or each clip's knee count for ``"knee"`` (label-free), plus
-            ``boundary_weight`` times the boundary scores where there are any) or "segmentation"
-            ("map" without stage 2's boundary scores: stage 1's exact segmentation at the same price).
+            ``boundary_weight`` times the boundary scores where there are any), "map_pruned" ("map" whose
+            keyframes must have a boundary logit ≥ ``candidate_logit``: only the segments between such
+            frames are rendered, :func:`map_pruned_segments`) or "segmentation" ("map" without stage 2's
+            boundary scores: stage 1's exact segmentation at the same price).
         pixel_weights: (B, N, D) weights of the future pixels in the BCE of "map", None for plain BCE.
-        costs: (B, N, S) that BCE of every segment if already known (see :func:`map_keyframes`).
+        costs: (B, N, S) that BCE of every segment if already known (see :func:`map_keyframes`; for
+            "map_pruned", of at least the segments it prices).
+        candidate_logit: "map_pruned"'s least boundary logit of a keyframe.
     Returns:
         Per clip, the keyframe positions inside its valid frames; "boundaries" and the map rules add the
         end of a sequence that stops inside the window (:func:`with_sequence_ends`).

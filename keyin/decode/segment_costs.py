@@ -70,6 +70,8 @@ def interpolation_costs(
     costs = torch.full((batch, n_future, max_offset), float("inf"), device=device)
     clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset, n_starts))
     if keep is not None:
+        if keep.dtype != torch.bool or keep.shape != costs.shape:
+            raise ValueError(f"keep must be a bool mask of shape {tuple(costs.shape)}, got {keep.dtype} {tuple(keep.shape)}")
         kept = keep.to(device)[clip, start, offset - 1]
         clip, start, offset = clip[kept], start[kept], offset[kept]
     for first in range(0, len(clip), chunk):
@@ -112,13 +114,14 @@ def video_interpolation_costs(
     n_frames, max_offset = len(embeddings), interpolator.max_offset
     if n_frames < 2 or len(frames) != n_frames:
         raise ValueError(f"a video's segment costs need T ≥ 2 embeddings and as many frames, got {n_frames} and {len(frames)}")
-    if keep is not None and keep.shape != (n_frames - 1, max_offset):
-        raise ValueError(f"keep must be (T - 1, S) = {(n_frames - 1, max_offset)}, got {tuple(keep.shape)}")
+    if keep is not None and (keep.dtype != torch.bool or keep.shape != (n_frames - 1, max_offset)):
+        raise ValueError(f"keep must be a bool mask of shape (T - 1, S) = {(n_frames - 1, max_offset)}, got {keep.dtype} "
+                         f"{tuple(keep.shape)}")
     costs = []
     for first in range(0, n_frames - 1, block):
         last = min(first + block + max_offset, n_frames)  # the block's starts and the frames they reach
         if keep is not None and not keep[first : first + block].any():
-            costs.append(embeddings.new_full((min(block, n_frames - 1 - first), max_offset), float("inf")))
+            costs.append(torch.full((min(block, n_frames - 1 - first), max_offset), float("inf"), device=embeddings.device))
             continue
         pixels = frames[first + 1 : last].to(embeddings.device)
         pixels = pixels.float().div_(255.0) if pixels.dtype == torch.uint8 else pixels

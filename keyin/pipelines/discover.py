@@ -64,6 +64,8 @@ def window_batches(
 def video_segments(video: ImportedVideo, segments: Segments, n_cond: int, n_future: int, batch_size: int) -> Tensor:
     """(T - 1, S) bool on the video's kept frames: the segments that any of its windows prices
     (``segments`` per window; row ``t`` starts at kept frame ``t``, as in :func:`window_costs`)."""
+    if not len(video.starts):
+        raise ValueError(f"video {video.id!r} has no windows, so no segments to price")
     counts = None
     for starts, clips, future_length in window_batches(video, n_cond, n_future, batch_size):
         keep = segments(clips, future_length).cpu()  # (B, N, S)

@@ -74,6 +74,14 @@ def test_without_pictures_only_keyframes_json_is_written_with_the_same_keyframes
     assert found["false"] == found["true"]
 
 
+def test_map_pruned_records_its_candidate_logit(root):
+    result = run("discover", "ckpt=keyin.ckpt", "input=videos/long.mp4", "rule=map_pruned", "candidate_logit=-2",
+                 "pictures=false", "progress=false", "hydra.run.dir=pruned", cwd=root)
+    assert result.returncode == 0, result.stderr
+    model = json.loads((root / "pruned" / "long.mp4" / "keyframes.json").read_text())["model"]
+    assert model["rule"] == "map_pruned" and model["candidate_logit"] == -2.0 and model["keyframe_cost"] == "knee"
+
+
 @pytest.fixture(scope="module")
 def bad(root):
     """Bad inputs beside the good checkpoint."""
@@ -113,6 +121,9 @@ BAD_INPUTS = [
     ("keyframe-cost", ["keyframe_cost=cheap"], "keyframe_cost='cheap' must be knee (label-free), nats per keyframe"),
     ("boundaries-without-evidence", ["ckpt=paper.ckpt", "rule=boundaries"],
      "rule=boundaries needs a model with offset evidence (model=keyin_plus), which paper.ckpt has not; pass rule=map"),
+    ("map-pruned-without-evidence", ["ckpt=paper.ckpt", "rule=map_pruned"],
+     "rule=map_pruned needs a model with offset evidence (model=keyin_plus), which paper.ckpt has not; pass rule=map"),
+    ("candidate-logit", ["candidate_logit=high"], "candidate_logit='high' must be a number (rule=map_pruned's least"),
     ("unknown-video-label", ["labels=labels.json", "input=videos/short.mp4"], "labels the video 'long.mp4', which is not"),
 ]
 

@@ -89,6 +89,20 @@ def test_map_pruned_needs_boundary_scores_and_keeps_maps_keyframes_when_every_fr
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(discovery="map_pruned")
     module = keyframe_module(offset_evidence=True, discovery="map_pruned").eval()
-    exact = module.discover(clips, lengths, "map", keyframe_cost=5.0)
-    assert keyin_keyframes(module.model, clips, lengths, "map_pruned", 5.0, candidate_logit=-float("inf")) == exact
+    module.hparams.map_candidate_logit = -float("inf")  # every frame a candidate
+    for price in (0.0, "knee"):
+        exact = module.discover(clips, lengths, "map", keyframe_cost=price)
+        assert module.discover(clips, lengths, "map_pruned", keyframe_cost=price) == exact
+        assert sum(map(len, exact)) > len(exact)  # more than the closing keyframes: not a forced answer
     assert set(module.discoverers("keyin_plus", ["map", "map_pruned"])) == {"keyin_plus_map", "keyin_plus"}
+
+
+def test_precomputed_costs_must_hold_every_segment_the_rule_prices():
+    from tests.planning.trained_models import keyframe_module
+
+    module = keyframe_module(offset_evidence=True).eval()
+    module.hparams.map_candidate_logit = -float("inf")
+    clips, lengths = torch.rand(2, 7, 3, 16, 16), torch.tensor([6, 6])
+    costs = torch.full((2, 6, 3), float("inf"))  # nothing computed
+    with pytest.raises(ValueError, match="costs lack segments"):
+        module.discover(clips, lengths, "map_pruned", keyframe_cost=0.0, costs=costs)
