@@ -122,19 +122,23 @@ def save_timeline(
     return save_figure(fig, path, dpi=110)
 
 
-def position_strip(width: int, n_frames: int, now: int, found: Sequence[int], labels: Sequence[int]) -> np.ndarray:
-    """(STRIP_HEIGHT, width, 3) uint8: where frame ``now`` of ``n_frames`` is, labels and keyframes ticked."""
-    def column(frame: int) -> int:
-        return min(width - 1, frame * width // max(n_frames, 1))
+def position_strips(width: int, n_frames: int, found: Sequence[int], labels: Sequence[int]) -> np.ndarray:
+    """(T, STRIP_HEIGHT, width, 3) uint8, one bar per frame: where that frame is in the video (white),
+    the part played so far lighter, labels ticked green above and keyframes red below. The ticks are
+    drawn once and each frame only chooses its columns, so a long video costs O(T · width)."""
+    def column(frames: np.ndarray) -> np.ndarray:
+        return np.minimum(width - 1, frames * width // max(n_frames, 1))
 
-    strip = np.full((STRIP_HEIGHT, width, 3), 40, dtype=np.uint8)
-    strip[:, : column(now)] = 90  # the part played so far
+    ahead, played = (np.full((STRIP_HEIGHT, width, 3), shade, dtype=np.uint8) for shade in (40, 90))
     half = STRIP_HEIGHT // 2
     for marks, colour, rows in ((labels, TRUE, slice(None, half)), (found, PREDICTED, slice(half, None))):
-        for frame in marks:
-            strip[rows, column(frame)] = colour
-    strip[:, column(now)] = 255
-    return strip
+        ticks = column(np.asarray(list(marks), dtype=np.int64))
+        for strip in (ahead, played):
+            strip[rows, ticks] = colour
+    now = column(np.arange(n_frames))  # (T,)
+    strips = np.where((np.arange(width) < now[:, None])[:, None, :, None], played, ahead)  # (T, h, w, 3)
+    strips[np.arange(n_frames), :, now] = 255
+    return strips
 
 
 def save_annotated_gif(
@@ -152,5 +156,5 @@ def save_annotated_gif(
     labels = labels or []
     future = lambda marks: [k - n_cond for k in marks]  # noqa: E731  (marked_frames counts after the conditioning frames)
     marked = marked_frames(clip, n_cond, future(labels), future(found))  # (T, h, w, 3)
-    strips = np.stack([position_strip(marked.shape[2], len(frames), now, found, labels) for now in range(len(frames))])
+    strips = position_strips(marked.shape[2], len(frames), found, labels)
     return save_keyframe_gif(path, np.concatenate([marked, strips], axis=1)[None], duration_ms=duration_ms, side=128)
