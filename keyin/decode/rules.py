@@ -25,8 +25,8 @@ SEGMENT_COST_RULES = ("map", "map_pruned", "segmentation")  # the rules that rea
 BOUNDARY_SCORE_RULES = ("boundaries", "map_pruned")  # the rules that read stage 2's boundary scores (offset_evidence)
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
 # posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every segment's frames (~7 ms
-# in keyin-discover), map_pruned only those of the segments between candidate keyframes
-# (benchmarks/results/discover_speed_rules_brownian.md).
+# in keyin-discover), map_pruned only those of the segments between candidate keyframes (~1.2 ms;
+# benchmarks/results/discover_speed_rules_brownian.md, discover_speed_map_pruned_brownian_1thread.md).
 RULES_BY_COST = ("boundaries", "offsets", "map_pruned", "map")
 MAP_CANDIDATE_LOGIT = -4.0  # map_pruned: the boundary logit a frame needs to be a candidate keyframe (docs/decisions.md)
 FAST_RULE_TOLERANCE = 0.01  # how far below map's validation F1 a cheaper rule may be and still be chosen
@@ -219,11 +219,12 @@ def keyin_keyframes(
     if rule == "boundaries":
         interior = boundary_keyframes(keys.boundary_scores, lengths, model.predictor.n_keyframes, model.predictor.max_offset)
     else:
+        keep = _candidate_keep(keys.boundary_scores, lengths, candidate_logit, model) if rule == "map_pruned" else None
         interior = map_keyframes(
             model.interpolator, model.decoder, embeddings[:, model.n_cond - 1 :], clips[:, model.n_cond :].flatten(2),
             future_length, model.predictor.n_keyframes, keyframe_cost,
             None if rule == "segmentation" else keys.boundary_scores, boundary_weight, weights=pixel_weights,
-            costs=costs, keep=_candidate_keep(keys.boundary_scores, lengths, candidate_logit, model) if rule == "map_pruned" else None,
+            costs=costs, keep=keep,
         )
     return with_sequence_ends(interior, lengths, n_future)
 
