@@ -3,6 +3,7 @@
     python benchmarks/train_step.py --scale cpu --steps 5
     python benchmarks/train_step.py --scale paper --steps 3
     python benchmarks/train_step.py --scale paper --dataset pushing --device cuda
+    python benchmarks/train_step.py --scale cpu --model keyin_plus --precision bf16   # the forward under bf16 autocast
 
 Builds both LightningModules from the Hydra config exactly as keyin-train does, feeds random
 binary clips of the dataset's shape, and times ``training_step`` + backward + Adam (after one
@@ -42,29 +43,30 @@ def synchronize(device: torch.device) -> None:
         torch.cuda.synchronize(device)
 
 
-def one_step(module, optimizer, batch) -> None:
-    loss = module.training_step(batch, 0)
+def one_step(module, optimizer, batch, bf16: bool = False) -> None:
+    with torch.autocast(next(module.parameters()).device.type, dtype=torch.bfloat16, enabled=bf16):
+        loss = module.training_step(batch, 0)
     optimizer.zero_grad()
     loss.backward()
     optimizer.step()
 
 
-def time_stage(module, batch, steps: int, device: torch.device) -> tuple[list[float], str]:
+def time_stage(module, batch, steps: int, device: torch.device, bf16: bool = False) -> tuple[list[float], str]:
     module.log_dict = lambda *args, **kwargs: None  # no trainer attached
     module.train()
     if hasattr(module, "freeze_stage1"):
         module.freeze_stage1()
     optimizer = module.configure_optimizers()
-    one_step(module, optimizer, batch)  # warm-up
+    one_step(module, optimizer, batch, bf16)  # warm-up
     times = []
     for _ in range(steps):
         synchronize(device)
         start = time.perf_counter()
-        one_step(module, optimizer, batch)
+        one_step(module, optimizer, batch, bf16)
         synchronize(device)
         times.append(time.perf_counter() - start)
     with profile() as profiler:
-        one_step(module, optimizer, batch)
+        one_step(module, optimizer, batch, bf16)
         synchronize(device)
     sort = "self_cuda_time_total" if device.type == "cuda" else "self_cpu_time_total"
     table = profiler.key_averages().table(sort_by=sort, row_limit=8)
@@ -78,6 +80,8 @@ def main() -> None:
     parser.add_argument("--model", default=None, help="model= override, e.g. keyin_plus (its teacher included)")
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--device", default="cpu", help="cpu or cuda")
+    parser.add_argument("--precision", choices=("32", "bf16"), default="32",
+                        help="bf16: each step's forward under bf16 autocast (as trainer.precision=bf16-mixed)")
     args = parser.parse_args()
     device = torch.device(args.device)
     torch.manual_seed(0)
@@ -92,7 +96,7 @@ def main() -> None:
     model = f" --model {args.model}" if args.model else ""
     print(f"## Training-step time, scale={args.scale}, dataset={args.dataset}, model={cfg.model.name}\n")
     print(f"- command: `python benchmarks/train_step.py --scale {args.scale} --dataset {args.dataset}{model} "
-          f"--steps {args.steps} --device {args.device}`")
+          f"--steps {args.steps} --device {args.device} --precision {args.precision}`")
     gpu = f", {torch.cuda.get_device_name(device)}" if device.type == "cuda" else ""
     print(f"- machine: {platform.processor() or platform.machine()}{gpu}, {torch.get_num_threads()} threads, "
           f"torch {torch.__version__}, {date.today()}; random binary clips, Adam, after 1 warm-up step\n")
@@ -103,7 +107,8 @@ def main() -> None:
         ("1 (interpolator)", stage1, cfg.scale.stage1_batch_size),
         ("2 (keyframes)", stage2, cfg.scale.batch_size),
     ):
-        times, table = time_stage(module, random_batch(cfg.dataset, batch_size, device), args.steps, device)
+        times, table = time_stage(module, random_batch(cfg.dataset, batch_size, device), args.steps, device,
+                                  args.precision == "bf16")
         print(f"| {name} | {batch_size} | {statistics.median(times):.3f} | {min(times):.3f} |")
         profiles.append((name, table))
     for name, table in profiles:
