@@ -9,3 +9,4 @@ PY=/work/main/.venv/bin/python
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=keyin_plus,keyin_paper,jumpy seed=0 logger=csv skip_finished=true
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=keyin_plus seed=2 logger=csv skip_finished=true
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=keyin_paper,jumpy,static seed=2 logger=csv skip_finished=true
+$PY -m keyin.cli.eval -m seed=2 ckpt=runs/multirun/metaworld_v2_table1/keyin_plus_seed2/checkpoints/keyframes/last.ckpt "discovery=[segmentation]" skip_finished=true progress=false hydra.sweep.dir=runs/multirun/metaworld_v2_table1 hydra.sweep.subdir=keyin_plus_segmentation_seed2  # stage 1's exact segmentation (the table's eval sweep)
