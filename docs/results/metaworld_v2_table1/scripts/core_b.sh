@@ -11,4 +11,5 @@ while pgrep -f "model=keyin_plus,keyin_paper,jumpy seed=0" > /dev/null && [ ! -f
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=static seed=0 logger=csv skip_finished=true
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=keyin_plus seed=1 logger=csv skip_finished=true
 $PY -m keyin.cli.train -m experiment=metaworld_v2_table1 model=keyin_paper,jumpy,static seed=1 logger=csv skip_finished=true
+$PY -m keyin.cli.eval -m seed=0 ckpt=runs/multirun/metaworld_v2_table1/keyin_plus_seed0/checkpoints/keyframes/last.ckpt "discovery=[segmentation]" skip_finished=true progress=false hydra.sweep.dir=runs/multirun/metaworld_v2_table1 hydra.sweep.subdir=keyin_plus_segmentation_seed0  # stage 1's exact segmentation (the table's eval sweep)
 $PY -m keyin.cli.eval -m seed=1 ckpt=runs/multirun/metaworld_v2_table1/keyin_plus_seed1/checkpoints/keyframes/last.ckpt "discovery=[segmentation]" skip_finished=true progress=false hydra.sweep.dir=runs/multirun/metaworld_v2_table1 hydra.sweep.subdir=keyin_plus_segmentation_seed1  # stage 1's exact segmentation (the table's eval sweep)
