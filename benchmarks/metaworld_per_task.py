@@ -2,6 +2,8 @@
 
     python benchmarks/metaworld_per_task.py docs/results/metaworld_table1/jobs \
         --out benchmarks/results/metaworld_per_task.md
+    python benchmarks/metaworld_per_task.py docs/results/metaworld_v2_table1/jobs --dataset metaworld_v2 \
+        --out benchmarks/results/metaworld_v2_per_task.md
 
 Reads each job's ``predictions.json`` (keyin-eval's per-clip truth, lengths and predictions) and the
 test split's ``task`` array; seeds of a method are pooled (their clips counted once per seed).
@@ -26,12 +28,13 @@ from keyin.eval.report import method_sort_key
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("jobs", type=Path)
+    parser.add_argument("--dataset", default="metaworld", help="the jobs' dataset (metaworld or metaworld_v2)")
     parser.add_argument("--data-dir", default="data")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
-    config = dataset_config("metaworld")
+    config = dataset_config(args.dataset)
     tasks = list(config.generator.tasks)
-    task_of = np.concatenate([load_arrays(p)["task"] for p in split_files(Path(args.data_dir) / "metaworld", "test")])
+    task_of = np.concatenate([load_arrays(p)["task"] for p in split_files(Path(args.data_dir) / args.dataset, "test")])
     pooled: dict[str, dict[str, list]] = collections.defaultdict(lambda: collections.defaultdict(list))
     for path in sorted(args.jobs.glob("*/predictions.json")):
         saved = json.loads(path.read_text())
@@ -41,8 +44,8 @@ def main() -> None:
                     pooled[method][key].append(value)
     header = "| method | " + " | ".join(tasks) + " | all |"
     lines = [
-        f"## Meta-World: interior F1 per task ({args.jobs})\n",
-        f"- command: `python benchmarks/metaworld_per_task.py {args.jobs}`",
+        f"## Meta-World ({args.dataset}): interior F1 per task ({args.jobs})\n",
+        f"- command: `python benchmarks/metaworld_per_task.py {args.jobs} --dataset {args.dataset}`",
         f"- machine: {cpu_model()}, {date.today()}; each method's seeds pooled\n",
         header, "|" + "---|" * (len(tasks) + 2),
     ]
