@@ -17,11 +17,11 @@ from keyin.data.frames import fit_note
 from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
 from keyin.data.labels import check_known, read_labels
 from keyin.decode.rules import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES
-from keyin.losses.image import plain_bce
 from keyin.decode.segmentation import KNEE
 from keyin.errors import ConfigError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
 from keyin.lit.run import compile_frame_networks
+from keyin.losses.image import plain_bce
 from keyin.pretrained import recorded_rule
 from keyin.pipelines.discover import discover_videos
 
@@ -112,8 +112,6 @@ def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> di
         raise ConfigError(f"rule={rule} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
                           f"has not; pass rule=map or rule=offsets")
     cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
-    if cfg.candidate_logit is not None:
-        module.hparams.map_candidate_logit = float(cfg.candidate_logit)
     return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule,
             "keyframe_cost": cost if rule in ("map", "map_pruned") else None,
             "candidate_logit": module.hparams.map_candidate_logit if rule == "map_pruned" else None,
@@ -124,6 +122,8 @@ def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> di
 def discover(cfg: DictConfig) -> dict:
     check_discover(cfg)
     module, trained = load_trained_module(cfg.ckpt, stage="keyframes")
+    if cfg.candidate_logit is not None:  # rule=map_pruned reads it from the module
+        module.hparams.map_candidate_logit = float(cfg.candidate_logit)
     model = model_record(cfg, module, trained)
     if cfg.compile:
         compile_frame_networks(module)
