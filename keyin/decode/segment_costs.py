@@ -11,7 +11,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from keyin.decode.segmentation import segment_starts_offsets
+from keyin.decode.segmentation import count_tables, segment_starts_offsets
 
 
 def _all_segments(batch: int, n_future: int, max_offset: int, n_starts: int | None = None) -> tuple[Tensor, Tensor, Tensor]:
@@ -159,14 +159,10 @@ def candidate_segments(candidates: Tensor, lengths: Tensor, max_offset: int, n_k
     end = torch.arange(n_future, device=device)[:, None] + torch.arange(1, max_offset + 1, device=device)  # (N, S)
     inside = end[None] <= lengths[:, None, None]  # (B, N, S)
     keep = allowed[:, :n_future, None] & allowed[:, end.clamp(max=n_future)] & inside
-    fewest = torch.full((batch, n_future + 1), n_future + 1, dtype=torch.long, device=device)  # fewest gaps to reach k
-    fewest[:, 0] = 0
-    for k in range(1, n_future + 1):
-        offsets = torch.arange(1, min(max_offset, k) + 1, device=device)
-        reached = torch.where(keep[:, k - offsets, offsets - 1], fewest[:, k - offsets] + 1, n_future + 1)
-        fewest[:, k] = reached.min(dim=1).values
-    infeasible = fewest.gather(1, lengths[:, None]).squeeze(1) > n_keyframes
-    return torch.where(infeasible[:, None, None], inside, keep)
+    free = torch.zeros(keep.shape).masked_fill_(~keep.cpu(), float("inf"))  # the segmentation DP on 0/inf costs
+    best, _ = count_tables(free, n_keyframes)  # (M + 1, B, N + 1): finite where m gaps reach index k
+    feasible = torch.isfinite(best[:, torch.arange(batch), lengths.cpu()]).any(dim=0).to(device)
+    return torch.where(feasible[:, None, None], keep, inside)
 
 
 def window_costs(video_costs: Tensor, firsts: Tensor, lengths: Tensor, n_future: int) -> Tensor:

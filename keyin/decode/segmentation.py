@@ -34,7 +34,7 @@ KNEE = "knee"  # the label-free keyframe price: each clip's count at the knee of
 KeyframeCost = float | str  # nats per keyframe, or KNEE
 
 
-def _count_tables(costs: Tensor, n_keyframes: int) -> tuple[Tensor, Tensor]:
+def count_tables(costs: Tensor, n_keyframes: int) -> tuple[Tensor, Tensor]:
     """The DP over (count, index): ``best[m, b, k]`` the cheapest cover of 0…k by exactly m gaps
     (inf where none), ``back[m, b, k]`` the offset of its last gap; both (M + 1, B, N + 1)."""
     batch, n_future, max_offset = costs.shape
@@ -101,7 +101,7 @@ def best_segmentation(
     if isinstance(keyframe_cost, str) and keyframe_cost != KNEE:
         raise ValueError(f"keyframe_cost must be a number (nats per keyframe) or {KNEE!r}, got {keyframe_cost!r}")
     price = 0.0 if keyframe_cost == KNEE else float(keyframe_cost)
-    best, back = _count_tables(costs.cpu() + price, n_keyframes)
+    best, back = count_tables(costs.cpu() + price, n_keyframes)
     if keyframe_cost == KNEE:
         n_gaps = knee_counts(best[:, :, n_future].T)
         total = best[:, :, n_future].T.gather(1, n_gaps[:, None]).squeeze(1)
