@@ -1,6 +1,6 @@
 """The results page's tables are pasted from the committed reports, unchanged: every row of each report
-named here stands in docs/results/README.md as it is in the report. README.md stays short and its
-relative links lead somewhere."""
+named here stands in docs/results/README.md as it is in the report. README.md stays short, its
+relative links lead somewhere, and its Table 1 figures are those of the reports its columns link."""
 
 import re
 from pathlib import Path
@@ -13,6 +13,7 @@ RESULTS = "docs/results/README.md"
 REPORTS_IN_RESULTS = (
     "docs/results/untrained_table1/table1.md", "docs/results/brownian_table1/table1.md", "docs/results/pushing_table1/table1.md",
     "docs/results/pushing_table2/table2.md", "docs/results/metaworld_table1/table1.md",
+    "docs/results/metaworld_v2_table1/table1.md",
 )
 README_MAX_LINES = 150
 
@@ -49,3 +50,55 @@ def test_every_relative_link_in_the_readme_points_to_a_file():
     assert relative, "README.md links no file"
     missing = [t for t in relative if not (ROOT / t).exists()]
     assert not missing, "README.md links files that do not exist: " + ", ".join(missing)
+
+
+def report_f1(report: str) -> dict[str, tuple[str, str, int]]:
+    """A Table 1 report's interior F1 per method: (mean, std, seeds) as the report prints them."""
+    lines = [line for line in (ROOT / report).read_text(encoding="utf-8").splitlines() if line.startswith("|")]
+    header = [cell.strip() for cell in lines[0].strip("|").split("|")]
+    method, f1, seeds = header.index("method"), header.index("F1 interior"), header.index("seeds")
+    found = {}
+    for line in table_rows("\n".join(lines)):
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        mean, std = cells[f1].split(" ± ")
+        found[cells[method]] = (mean, std, int(cells[seeds]))
+    return found
+
+
+def readme_method(label: str) -> str:
+    """A README row's method: the last `name` in its label, else its first word (``Jumpy`` → jumpy)."""
+    named = re.findall(r"`([a-z0-9_]+)`", label)
+    return named[-1] if named else label.split()[0].lower()
+
+
+def test_the_readme_table1_figures_are_those_of_the_linked_reports():
+    text = (ROOT / "README.md").read_text(encoding="utf-8").split("\n| method | [Brownian F1]", 1)
+    assert len(text) == 2, "README.md has no results table (a header row starting '| method | [Brownian F1]')"
+    lines = ("| method | [Brownian F1]" + text[1]).split("\n\n", 1)[0].splitlines()  # the table alone
+    links = [re.search(r"\]\(([^)]+)\)", cell) for cell in lines[0].strip("|").split("|")]
+    columns = {i: link.group(1) for i, link in enumerate(links) if link and link.group(1).endswith("table1.md")}
+    assert len(columns) >= 3, "README.md's results table links fewer than three Table 1 reports"
+    reports = {i: report_f1(report) for i, report in columns.items()}
+    checked = 0
+    for line in lines[2:]:
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        method = readme_method(cells[0])
+        for i, report in columns.items():
+            figure = re.match(r"\**([0-9.]+)\**(?: ± ([0-9.]+))?", cells[i])
+            if not figure:
+                continue
+            assert method in reports[i], f"README.md's {method!r} has a figure in {report}'s column but no row there"
+            mean, std, seeds = reports[i][method]
+            where = f"README.md's {method!r} in the column of {report}"
+            assert figure.group(1) == mean, f"{where}: {figure.group(1)}, the report says {mean}"
+            if figure.group(2) is None:
+                assert seeds == 1 and "(seed 0)" in cells[i], f"{where}: one figure without ± but {seeds} seeds"
+            else:
+                assert figure.group(2) == std, f"{where}: ± {figure.group(2)}, the report says ± {std}"
+            checked += 1
+    assert checked >= 20, f"only {checked} README.md figures were compared with the reports"
+
+
+def test_the_readme_method_of_a_row_label():
+    assert readme_method("KEYIN + ours, `map` (`keyin_plus`)") == "keyin_plus"
+    assert readme_method("Constant (every 5 frames)") == "constant"
