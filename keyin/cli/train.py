@@ -21,7 +21,7 @@ from keyin.cli.tracking import job_logger
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
-from keyin.lit.checkpoints import load_checkpoint, load_stage1
+from keyin.lit.checkpoints import load_checkpoint, load_stage1, warm_start
 from keyin.lit.run import fit_stage
 from keyin.pretrained import is_pretrained
 
@@ -30,10 +30,12 @@ Discoverers = dict[str, Callable]
 
 def stage1_checkpoint(cfg: DictConfig, stage1_folder: Path) -> Path | str:
     """The checkpoint that stage 2 takes its stage 1 from (a stage-1 one, or a stage-2 one or
-    ``pretrained:<name>``, whose frozen stage 1 is taken); one clear error if there is none."""
-    if cfg.interpolator_ckpt and is_pretrained(cfg.interpolator_ckpt):
-        return cfg.interpolator_ckpt
-    path = Path(cfg.interpolator_ckpt or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt")
+    ``pretrained:<name>``, whose frozen stage 1 is taken; ``init_ckpt`` where ``interpolator_ckpt`` is
+    not given); one clear error if there is none."""
+    given = cfg.interpolator_ckpt or cfg.init_ckpt  # a warm start's checkpoint holds its stage 1
+    if given and is_pretrained(given):
+        return given
+    path = Path(given or stage1_folder / "checkpoints" / "interpolator" / "last.ckpt")
     if not path.is_file():
         raise CheckpointError(
             f"stage 2 starts from a stage-1 checkpoint and {path} does not exist; train stage 1 first "
@@ -61,6 +63,8 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
     stage1 = load_stage1(stage1_checkpoint(cfg, stage1_folder))
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
+    if cfg.init_ckpt:  # a warm start; a resumed run's last.ckpt then replaces these weights
+        warm_start(module, cfg.init_ckpt)
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
     return module.discoverers(cfg.model.name)
 

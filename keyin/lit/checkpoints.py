@@ -104,6 +104,23 @@ def load_stage1(path: str | Path) -> dict[str, Any]:
     return {"hyper_parameters": checkpoint["hyper_parameters"]["stage1"], "state_dict": networks}
 
 
+def warm_start(module: L.LightningModule, path: str | Path) -> None:
+    """Copy every weight of the checkpoint ``path`` (``pretrained:<name>`` too) of ``module``'s stage into
+    ``module`` before its first step (keyin-train ``init_ckpt=``): a warm start, the optimizer fresh.
+
+    Raises:
+        CheckpointError: as :func:`load_checkpoint`, or a checkpoint of other parameter shapes.
+    """
+    saved = load_checkpoint(path, module.stage)
+    state = upgrade_state_dict(saved["state_dict"], module.stage)
+    if parameter_shapes(state) != parameter_shapes(module.state_dict()):
+        raise CheckpointError(
+            f"init_ckpt={path} holds a model={saved_model_name(saved)} whose parameter shapes differ from this run's; "
+            f"warm-start with the model= and scale= it was trained with"
+        )
+    module.load_state_dict(state)
+
+
 class AtomicCheckpointIO(TorchCheckpointIO):
     """Writes each checkpoint next to its destination and renames it into place, so a crash or a
     full disk leaves the previous ``last.ckpt`` whole (Lightning's default may stage the file in

@@ -268,3 +268,27 @@ def test_compiled_networks_train_and_keep_the_checkpoint_names(tmp_path):
         assert result.returncode == 0, result.stderr[-3000:]
         runs[name] = load_checkpoint(tmp_path / name / "checkpoints" / "surprise" / "last.ckpt")["state_dict"]
     assert runs["plain"].keys() == runs["compiled"].keys()
+
+
+def test_a_warm_start_begins_at_every_weight_of_init_ckpt(trained, tmp_path):
+    """init_ckpt=: stage 2 starts from the checkpoint's weights (predictor and stage 1), trains on from
+    there, and another model's checkpoint is refused with the fix."""
+    root, _ = trained
+    source = root / "run" / "checkpoints" / "keyframes" / "last.ckpt"
+    result = run("train", *KEYIN_SMOKE, "stage=keyframes", f"init_ckpt={source}", "scale.stage2_steps=1",
+                 "scale.val_every=1", "evaluate=false", "hydra.run.dir=warm", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    given = load_checkpoint(source)["state_dict"]
+    trained_on = load_checkpoint(tmp_path / "warm" / "checkpoints" / "keyframes" / "last.ckpt")["state_dict"]
+    assert given.keys() == trained_on.keys()
+    frozen = [name for name in given if name.startswith(("model.encoder.", "model.decoder.", "model.interpolator."))]
+    for name in frozen:  # stage 1 stays frozen: exactly the warm start's
+        torch.testing.assert_close(trained_on[name], given[name], rtol=0, atol=0)
+    moved = [name for name in given if name not in frozen and not torch.equal(trained_on[name], given[name])]
+    assert moved and all(name.startswith("model.predictor.") for name in moved)  # one Adam step from there
+    assert max((trained_on[name] - given[name]).abs().max().item() for name in moved) < 0.05
+
+    refused = run("train", "scale=smoke", "model=keyin", "stage=keyframes", f"init_ckpt={source}", "logger=none",
+                  "hydra.run.dir=other", cwd=tmp_path)
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr
+    assert "whose parameter shapes differ from this run's; warm-start with the model= and scale=" in error_line(refused)
