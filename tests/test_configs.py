@@ -200,3 +200,42 @@ def test_pushing_irregular_is_pushing_with_irregular_timing():
     assert irregular["dataset"]["max_offset"] == generator["max_push_frames"] + generator["max_pause_frames"]
     assert irregular["scale"] == regular["scale"]  # scale=cpu's 64x64 pushing sizes
     assert table["dataset"]["name"] == "pushing_irregular"
+
+
+# Every choice the paper states (section 4, appendix 6; docs/decisions.md, "The paper's stated configuration"):
+# the config key, and the value the paper gives.
+STATED = {
+    "model.keyframes.lstm_hidden": 256, "model.keyframes.lstm_layers": 2,  # "a simple two-layer LSTM with a
+    "model.interpolator.lstm_hidden": 256, "model.interpolator.lstm_layers": 2,  # 256-dimensional state ... for all"
+    "model.interpolator.mlp_hidden": 256,
+    "model.keyframes.lr": 2e-4, "model.interpolator.lr": 2e-4,  # "a learning rate of 2e-4"
+    "scale.batch_size": 30, "scale.stage1_batch_size": 30,  # "batch size of 30"
+    "model.interpolator.offset_min": 2, "model.interpolator.offset_max": 8,  # "segments of two to eight frames"
+    "model.interpolator.kl_weight": 1e-3,  # "The KL-divergence term for the interpolator VAE is 10^-3"
+    "model.keyframes.beta_ke": 1.0, "model.keyframes.beta_ki": 0.0, "model.keyframes.beta_kl": 0.05,
+    "model.keyframes.frozen": "lstm_inter",  # "we freeze LSTM_inter weights"
+    "model.keyframes.delta_input": "argmax",  # Init_inter = MLP(K^e,t-1, K^e,t, δ̂^t), δ̂ = argmax δ
+    "model.keyframes.n_keyframes": 6, "dataset.max_offset": 10, "dataset.n_cond": 5, "dataset.n_future": 30,
+    "model.interpolator.foreground_weight": 1.0,  # "sigmoid and ... BCE loss": the plain BCE
+    "model.keyframes.teacher_weight": 0.0, "model.keyframes.offset_evidence": False,  # the paper's loss alone
+    "model.keyframes.discovery": "offsets",  # the argmax offsets
+}
+
+
+def test_the_stated_configuration_composes_to_every_value_the_paper_states():
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = resolve("train", ["experiment=brownian_keyin_stated"])
+        paper_budget = resolve("train", ["experiment=brownian_keyin_stated", "scale.stage1_steps=100000",
+                                         "scale.stage2_steps=200000"])
+    for composed in (cfg, paper_budget):
+        for key, value in STATED.items():
+            node = composed
+            for part in key.split("."):
+                node = node[part]
+            assert node == value, (key, node, value)
+        assert composed["model"]["interpolator"]["latent_dim"] > 0  # "we train the interpolator in a stochastic manner"
+        assert composed["model"]["interpolator"]["step_input"] == "autoregressive"
+        assert composed["model"]["interpolator"]["norm"] == "batch" and not composed["model"]["interpolator"]["coord_channels"]
+    assert (cfg["scale"]["stage1_steps"], cfg["scale"]["stage2_steps"]) == (10_000, 20_000)
+    assert cfg["model"]["name"] == "keyin_paper_stated_20k"  # the budget in the row's name
+    assert (paper_budget["scale"]["stage1_steps"], paper_budget["scale"]["stage2_steps"]) == (100_000, 200_000)
