@@ -1,0 +1,146 @@
+"""Which channel of the keyframe predictor walks away from the true keyframes under the paper's loss? (issue 62)
+
+    python studies/warm_start_arms.py pretrained:brownian --arms sampled mean tied_mean --steps 500 \
+        --out docs/results/warm_start_brownian/arms.md
+
+Every arm starts stage 2 at the same trained checkpoint (``pretrained:brownian``: keyin_plus, argmax-offset
+F1 0.872 on 300 validation clips), drops the teacher, and trains on the paper's loss (eq. 3-5 as keyin
+implements it, ``KeyframeModule.soft_loss``) with a fresh Adam, the same training clips and seed;
+every ``--every`` steps it scores the argmax offsets (keyin-eval's ``offsets`` rule) on ``--clips``
+validation clips and logs each term of the loss there. The arms change one channel at a time:
+
+- ``sampled``: as keyin-train trains (the keyframe latents z drawn from the posterior);
+- ``mean``: z at its posterior mean (no sampling noise in δ and K̂);
+- ``tied_mean``: z at its mean and K̂ replaced by its soft target K̃^e(δ) (the keyframes follow δ exactly;
+  L_ke = 0), so δ is the only thing that moves the interpolation;
+- ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from datetime import date
+from pathlib import Path
+
+import torch
+from torch.utils.data import DataLoader
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
+
+from keyin.data.datamodule import split_clips  # noqa: E402
+from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
+from keyin.lit.registry import load_trained_module  # noqa: E402
+from keyin.lit.modes import evaluating  # noqa: E402
+from keyin.losses.soft_keyframe import offset_entropy, soft_keyframe_targets  # noqa: E402
+from keyin.models.keyin import interpolator_offsets  # noqa: E402
+from keyin.models.positions import position_distributions  # noqa: E402
+from hydra.utils import instantiate  # noqa: E402
+
+ARMS = {  # name: (sample z, tie K̂ to K̃^e(δ), learning rate)
+    "sampled": (True, False, 1e-3),
+    "mean": (False, False, 1e-3),
+    "tied_mean": (False, True, 1e-3),
+    "sampled_lr1e-4": (True, False, 1e-4),
+    "mean_lr1e-4": (False, False, 1e-4),
+}
+
+
+def forward(module, clips: torch.Tensor, lengths: torch.Tensor, sample: bool, tied: bool) -> dict:
+    """The posterior forward of ``KEYIN.forward``, with the latents' mean when not ``sample`` and K̂
+    replaced by K̃^e(δ) when ``tied``."""
+    model = module.model
+    out = model(clips, lengths, sample=sample)
+    if tied:
+        keyframe_pos, _ = position_distributions(out["offset_probs"])
+        key_emb = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
+        out["key_emb"] = key_emb
+        out["frames"] = model.interpolate(out["boundary_emb"][:, 0], key_emb,
+                                          interpolator_offsets(out["offset_probs"], model.delta_input))
+    return out
+
+
+@torch.no_grad()
+def validate(module, batch: dict, sample: bool, tied: bool) -> dict[str, float]:
+    """Argmax-offset F1 (keyin-eval's ``offsets``) and the loss terms on the validation batch."""
+    clips, lengths = batch["frames"], batch["future_length"]
+    found = module.discover(clips, lengths, "offsets")
+    scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
+    with evaluating(module):
+        torch.manual_seed(0)
+        out = forward(module, clips, lengths, sample, tied)
+        terms = module.soft_loss(clips, lengths, out)
+    return {
+        "f1": scores["f1"], "keys": scores["n_predicted"], "patterns": float(len({tuple(row) for row in found})),
+        "loss": terms["loss"].item(), "inter": terms["inter"].item(), "key_emb": terms["key_emb"].item(),
+        "kl": terms["kl"].item(), "entropy": offset_entropy(out["offset_probs"]).mean().item(),
+    }
+
+
+def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int) -> list[dict]:
+    sample, tied, lr = ARMS[arm]
+    module, _ = load_trained_module(ckpt)
+    module.train()
+    trainable = [p for p in module.parameters() if p.requires_grad]
+    optimizer = torch.optim.Adam(trainable, lr=lr, betas=(0.9, 0.999))
+    generator = torch.Generator().manual_seed(seed)
+    loader = iter(DataLoader(train, batch_size=batch_size, shuffle=True, generator=generator, drop_last=True))
+    torch.manual_seed(seed)
+    rows = [{"step": 0, **validate(module, val_batch, sample, tied)}]
+    print(arm, rows[-1], flush=True)
+    for step in range(1, steps + 1):
+        batch = next(loader)
+        module.train()
+        out = forward(module, batch["frames"], batch["future_length"], sample, tied)
+        loss = module.soft_loss(batch["frames"], batch["future_length"], out)["loss"]
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        if step % every == 0:
+            rows.append({"step": step, **validate(module, val_batch, sample, tied)})
+            print(arm, rows[-1], flush=True)
+    return rows
+
+
+def main() -> None:
+    parser = clip_arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), clips=300)
+    parser.add_argument("ckpt", help="a stage-2 checkpoint or pretrained:<name> to start every arm at")
+    parser.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
+    parser.add_argument("--steps", type=int, default=500)
+    parser.add_argument("--every", type=int, default=100)
+    parser.add_argument("--batch-size", type=int, default=30)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args()
+    module, config = load_trained_module(args.ckpt)
+    dataset, val_batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
+    train = split_clips(dataset, instantiate(dataset.generator), "train", 100_000, args.data_dir)
+    started = time.perf_counter()
+    results = {arm: run_arm(args.ckpt, arm, train, val_batch, args.steps, args.every, args.batch_size, args.seed) for arm in args.arms}
+    minutes = (time.perf_counter() - started) / 60
+    command = (f"python studies/warm_start_arms.py {args.ckpt} --arms {' '.join(args.arms)} --steps {args.steps} "
+               f"--every {args.every} --clips {args.clips} --seed {args.seed}")
+    lines = [
+        f"# Warm start at `{args.ckpt}` on the paper's loss alone, one channel changed per arm",
+        "",
+        f"`{command}` ({len(val_batch['frames'])} {args.split} clips; {cpu_model()}, {torch.get_num_threads()} thread(s), "
+        f"{date.today()}, {minutes:.0f} min). Columns: argmax-offset F1, interior keyframes per clip, distinct patterns, "
+        "the loss and its terms (nats per clip) and δ's entropy on the validation clips.",
+        "",
+        "| arm | step | F1 | keys/clip | patterns | loss | L_inter | L_ke | KL | δ entropy |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for arm, rows in results.items():
+        lines += [f"| {arm} | {r['step']} | {r['f1']:.3f} | {r['keys']:.2f} | {r['patterns']:.0f} | {r['loss']:.1f} | "
+                  f"{r['inter']:.1f} | {r['key_emb']:.2f} | {r['kl']:.1f} | {r['entropy']:.2f} |" for r in rows]
+    publish("\n".join(lines) + "\n", args.out)
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({"command": command, "date": str(date.today()), **results}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
