@@ -102,3 +102,23 @@ def test_the_readme_table1_figures_are_those_of_the_linked_reports():
 def test_the_readme_method_of_a_row_label():
     assert readme_method("KEYIN + ours, `map` (`keyin_plus`)") == "keyin_plus"
     assert readme_method("Constant (every 5 frames)") == "constant"
+
+
+def test_what_the_readme_says_the_keyin_paper_rows_ran_is_what_their_job_configs_hold():
+    """README's Methods and Results describe the `keyin_paper` rows as the paper's loss at CPU sizes on our frame
+    model (2-2.5k + 1.5k steps, all of stage 1 frozen, soft δ); every committed job config of those rows agrees."""
+    import yaml
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    methods = next(line for line in text.splitlines() if line.startswith("| `keyin` (rows say `keyin_paper`)"))
+    assert "`scale=cpu` on `backbone=ours`, all of stage 1 frozen, soft δ" in methods
+    assert "| the paper's loss, CPU sizes, our frame model, 2-2.5k + 1.5k steps (`keyin_paper`) |" in text
+    configs = sorted(ROOT.glob("docs/results/*_table1/jobs/keyin_paper_seed*/config.yaml"))
+    assert len(configs) >= 9  # Brownian, pushing and Meta-World, 3 seeds each
+    for path in configs:
+        config = yaml.safe_load(path.read_text())
+        keyframes, scale = config["model"]["keyframes"], config["scale"]
+        assert config["backbone"]["name"] == "ours" and scale["lstm_hidden"] == 128 and scale["inter_latent"] == 0, path
+        assert keyframes.get("frozen", "stage1") == "stage1" and keyframes.get("delta_input", "soft") == "soft", path
+        assert keyframes["teacher_weight"] == 0 and not keyframes["offset_evidence"], path
+        assert scale["stage2_steps"] == 1500 and scale["stage1_steps"] in (2000, 2500), path
