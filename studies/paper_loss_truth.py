@@ -267,7 +267,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=300)
     parser.add_argument("--lr", type=float, default=0.05)
     parser.add_argument("--constant", type=int, default=None, help="the collapsed pattern's spacing (default: the dataset's Constant)")
-    parser.add_argument("--readings", nargs="*", default=[r.name for r in READINGS])
+    parser.add_argument("--readings", nargs="*", default=[r.name for r in READINGS], choices=[r.name for r in READINGS])
     parser.add_argument("--json", type=Path, help="also write every number as JSON here")
     args = parser.parse_args()
     torch.manual_seed(0)
@@ -280,7 +280,8 @@ def main() -> None:
     constant = args.constant or dataset.tuned.constant_offset
     collapsed = torch.full_like(truth, constant)
     every = sorted({0, 10, 25, 50, 100, 200, args.steps} & set(range(args.steps + 1)))
-    readings = [r for r in READINGS if r.name in args.readings]
+    by_name = {r.name: r for r in READINGS}
+    readings = [by_name[name] for name in args.readings]  # in the order asked
     started = time.perf_counter()
     results: dict[str, Any] = {"straight_cost_per_frame": straight_segment_costs(stage1, clips)}
     for reading in readings:
@@ -297,6 +298,9 @@ def main() -> None:
         entry["from_collapsed_free"] = descend(reading, stage1, collapsed, clips, False, args.steps, args.lr, every)
         results[reading.name] = entry
         print(reading.name, json.dumps({k: v for k, v in entry.items() if k != "reading"})[:600], flush=True)
+        if args.json:  # after each reading: a stopped run keeps what it measured
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps({"clips": len(clips.truth), "date": str(date.today()), **results}, indent=1))
     seconds = time.perf_counter() - started
     command = f"python studies/paper_loss_truth.py {args.ckpt} --clips {args.clips} --steps {args.steps} --lr {args.lr}"
     lines = [
