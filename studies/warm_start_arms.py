@@ -13,7 +13,10 @@ validation clips and logs each term of the loss there. The arms change one chann
 - ``mean``: z at its posterior mean (no sampling noise in δ and K̂);
 - ``tied_mean``: z at its mean and K̂ replaced by its soft target K̃^e(δ) (the keyframes follow δ exactly;
   L_ke = 0), so δ is the only thing that moves the interpolation;
-- ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate.
+- ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
+- ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
+  weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
+  alignments no longer lowers the loss (studies/paper_loss_truth.py, reading ``expected_bce``).
 """
 
 from __future__ import annotations
@@ -29,7 +32,9 @@ import torch
 from torch.utils.data import DataLoader
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
+from paper_loss_truth import Clips, Reading, interpolation_term  # noqa: E402
 
 from keyin.data.datamodule import split_clips  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
@@ -40,13 +45,31 @@ from keyin.models.keyin import interpolator_offsets  # noqa: E402
 from keyin.models.positions import position_distributions  # noqa: E402
 from hydra.utils import instantiate  # noqa: E402
 
-ARMS = {  # name: (sample z, tie K̂ to K̃^e(δ), learning rate)
-    "sampled": (True, False, 1e-3),
-    "mean": (False, False, 1e-3),
-    "tied_mean": (False, True, 1e-3),
-    "sampled_lr1e-4": (True, False, 1e-4),
-    "mean_lr1e-4": (False, False, 1e-4),
+ARMS = {  # name: (sample z, tie K̂ to K̃^e(δ), learning rate, L_inter of the expected error)
+    "sampled": (True, False, 1e-3, False),
+    "mean": (False, False, 1e-3, False),
+    "tied_mean": (False, True, 1e-3, False),
+    "sampled_lr1e-4": (True, False, 1e-4, False),
+    "mean_lr1e-4": (False, False, 1e-4, False),
+    "expected": (True, False, 1e-3, True),
 }
+EXPECTED = Reading("expected_bce", "Σ δ̃ BCE(I_j, Î_i)", mixture="expected")
+
+
+def expected_inter(module, clips: torch.Tensor, lengths: torch.Tensor, out: dict) -> torch.Tensor:
+    """(B,) L_inter as the expected BCE of the interpolated frames over where they land."""
+    _, frame_pos = position_distributions(out["offset_probs"])
+    future = clips[:, module.model.n_cond :].flatten(2)
+    return interpolation_term(EXPECTED, frame_pos, out["frames"], Clips(None, None, None, future, lengths, []))
+
+
+def arm_loss(module, clips: torch.Tensor, lengths: torch.Tensor, out: dict, expected: bool) -> dict[str, torch.Tensor]:
+    """The paper's loss terms of ``out``; with ``expected`` its L_inter replaced by :func:`expected_inter`."""
+    terms = module.soft_loss(clips, lengths, out)
+    terms["inter_expected"] = expected_inter(module, clips, lengths, out).mean()
+    if expected:
+        terms["loss"] = terms["loss"] - terms["inter"] + terms["inter_expected"]
+    return terms
 
 
 def forward(module, clips: torch.Tensor, lengths: torch.Tensor, sample: bool, tied: bool) -> dict:
@@ -64,7 +87,7 @@ def forward(module, clips: torch.Tensor, lengths: torch.Tensor, sample: bool, ti
 
 
 @torch.no_grad()
-def validate(module, batch: dict, sample: bool, tied: bool) -> dict[str, float]:
+def validate(module, batch: dict, sample: bool, tied: bool, expected: bool) -> dict[str, float]:
     """Argmax-offset F1 (keyin-eval's ``offsets``) and the loss terms on the validation batch."""
     clips, lengths = batch["frames"], batch["future_length"]
     found = module.discover(clips, lengths, "offsets")
@@ -72,16 +95,17 @@ def validate(module, batch: dict, sample: bool, tied: bool) -> dict[str, float]:
     with evaluating(module):
         torch.manual_seed(0)
         out = forward(module, clips, lengths, sample, tied)
-        terms = module.soft_loss(clips, lengths, out)
+        terms = arm_loss(module, clips, lengths, out, expected)
     return {
         "f1": scores["f1"], "keys": scores["n_predicted"], "patterns": float(len({tuple(row) for row in found})),
         "loss": terms["loss"].item(), "inter": terms["inter"].item(), "key_emb": terms["key_emb"].item(),
         "kl": terms["kl"].item(), "entropy": offset_entropy(out["offset_probs"]).mean().item(),
+        "inter_expected": terms["inter_expected"].item(),
     }
 
 
 def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int) -> list[dict]:
-    sample, tied, lr = ARMS[arm]
+    sample, tied, lr, expected = ARMS[arm]
     module, _ = load_trained_module(ckpt)
     module.train()
     trainable = [p for p in module.parameters() if p.requires_grad]
@@ -89,18 +113,18 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
     generator = torch.Generator().manual_seed(seed)
     loader = iter(DataLoader(train, batch_size=batch_size, shuffle=True, generator=generator, drop_last=True))
     torch.manual_seed(seed)
-    rows = [{"step": 0, **validate(module, val_batch, sample, tied)}]
+    rows = [{"step": 0, **validate(module, val_batch, sample, tied, expected)}]
     print(arm, rows[-1], flush=True)
     for step in range(1, steps + 1):
         batch = next(loader)
         module.train()
         out = forward(module, batch["frames"], batch["future_length"], sample, tied)
-        loss = module.soft_loss(batch["frames"], batch["future_length"], out)["loss"]
+        loss = arm_loss(module, batch["frames"], batch["future_length"], out, expected)["loss"]
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
         if step % every == 0:
-            rows.append({"step": step, **validate(module, val_batch, sample, tied)})
+            rows.append({"step": step, **validate(module, val_batch, sample, tied, expected)})
             print(arm, rows[-1], flush=True)
     return rows
 
@@ -119,7 +143,12 @@ def main() -> None:
     dataset, val_batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
     train = split_clips(dataset, instantiate(dataset.generator), "train", 100_000, args.data_dir)
     started = time.perf_counter()
-    results = {arm: run_arm(args.ckpt, arm, train, val_batch, args.steps, args.every, args.batch_size, args.seed) for arm in args.arms}
+    results = {}
+    for arm in args.arms:
+        results[arm] = run_arm(args.ckpt, arm, train, val_batch, args.steps, args.every, args.batch_size, args.seed)
+        if args.json:  # after each arm: a stopped run keeps what it measured
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps({"date": str(date.today()), **results}, indent=1))
     minutes = (time.perf_counter() - started) / 60
     command = (f"python studies/warm_start_arms.py {args.ckpt} --arms {' '.join(args.arms)} --steps {args.steps} "
                f"--every {args.every} --clips {args.clips} --seed {args.seed}")
@@ -130,12 +159,12 @@ def main() -> None:
         f"{date.today()}, {minutes:.0f} min). Columns: argmax-offset F1, interior keyframes per clip, distinct patterns, "
         "the loss and its terms (nats per clip) and δ's entropy on the validation clips.",
         "",
-        "| arm | step | F1 | keys/clip | patterns | loss | L_inter | L_ke | KL | δ entropy |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| arm | step | F1 | keys/clip | patterns | loss | L_inter | L_inter, expected error | L_ke | KL | δ entropy |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for arm, rows in results.items():
         lines += [f"| {arm} | {r['step']} | {r['f1']:.3f} | {r['keys']:.2f} | {r['patterns']:.0f} | {r['loss']:.1f} | "
-                  f"{r['inter']:.1f} | {r['key_emb']:.2f} | {r['kl']:.1f} | {r['entropy']:.2f} |" for r in rows]
+                  f"{r['inter']:.1f} | {r['inter_expected']:.1f} | {r['key_emb']:.2f} | {r['kl']:.1f} | {r['entropy']:.2f} |" for r in rows]
     publish("\n".join(lines) + "\n", args.out)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
