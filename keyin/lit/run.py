@@ -142,6 +142,7 @@ def fit_stage(
             module.load_state_dict(saved["state_dict"])
             return last
     with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Checkpoint directory .* exists and is not empty")  # resumed here by design
         frozen = getattr(module, "frozen_by_design", None)
         if frozen:  # frozen networks are in eval mode by design: said once, in our words
             warnings.filterwarnings("ignore", message=r"Found \d+ module\(s\) in eval mode")
