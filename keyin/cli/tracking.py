@@ -73,15 +73,17 @@ def flat(config: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
 @rank_zero_only
 def log_config(logger: Logger | bool, cfg: DictConfig, scale: str | None) -> None:
     """Send the job's whole resolved config to the tracker: nested into wandb's config (with ``method``
-    and ``scale_preset`` beside it); flattened as TensorBoard's hyperparameters, with method, dataset,
-    seed and scale (the preset) on top and :data:`RESULTS` declared as the HParams metrics."""
+    and ``scale_preset`` beside it); flattened as TensorBoard's hyperparameters, with Method, Dataset,
+    Seed and Scale (the preset) on top and :data:`RESULTS` declared as the HParams metrics."""
     config = OmegaConf.to_container(cfg, resolve=True)
     if isinstance(logger, WandbLogger):
         logger.experiment.config.update({"method": cfg.model.name, "scale_preset": scale, **config}, allow_val_change=True)
     elif isinstance(logger, TensorBoardLogger):
         from torch.utils.tensorboard.summary import hparams
 
-        top = {"method": cfg.model.name, "dataset": cfg.dataset.name, "seed": cfg.seed, "scale": str(scale)}
+        # capitalised, so that they sort first (TensorBoard orders the hyperparameters that differ between runs
+        # first, then by name; lower-case config keys follow)
+        top = {"Method": cfg.model.name, "Dataset": cfg.dataset.name, "Seed": cfg.seed, "Scale": str(scale)}
         writer = logger.experiment._get_file_writer()
         for summary in hparams(top | flat(config), dict.fromkeys(RESULTS, 0.0)):
             writer.add_summary(summary)

@@ -64,7 +64,7 @@ def test_every_run_is_named_by_what_it_changes_and_holds_its_config_and_results(
     for path in runs:
         scalars, params, metrics = tensorboard_run(path)
         method = path.name.split("-")[0]
-        assert {"method": method, "dataset": "brownian", "seed": 0, "scale": "smoke"}.items() <= params.items()
+        assert {"Method": method, "Dataset": "brownian", "Seed": 0, "Scale": "smoke"}.items() <= params.items()
         assert params["model/name"] == method and params["scale/stage2_steps"] == 3  # the whole config, flattened
         assert {"test/f1", "test/f1_interior", "test/f1_tol1_interior", "val/f1_best", "val/f1_best_step"} <= set(metrics)
         assert "hp_metric" not in scalars
