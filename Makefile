@@ -4,7 +4,7 @@
 VENV ?= .venv
 PYTHON ?= python3
 TORCH_SPEC ?= torch==2.13.0
-EXTRAS ?= dev,sim,track,launchers
+EXTRAS ?= dev,sim,track,launchers,tune
 BIN = $(VENV)/bin
 STAMP = $(VENV)/.keyin-installed
 

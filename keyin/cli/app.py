@@ -168,7 +168,7 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
         @functools.wraps(task)
         def configured(cfg: DictConfig) -> Any:
             show_library_info(bool(cfg.get("verbose", False)))
-            return task(cfg)
+            return objective(task(cfg), cfg.get("objective"))
 
         hydra_main = hydra.main(config_path=f"pkg://{CONFIG_MODULE}", config_name=config_name, version_base="1.3")(configured)
 
@@ -187,6 +187,16 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
         return main
 
     return decorate
+
+
+def objective(result: Any, key: str | None) -> Any:
+    """What a job returns to Hydra's sweeper: ``result[key]`` (its metrics' ``objective``, e.g. the
+    validation F1 an Optuna sweep maximises) as a float, None where the job has no such value; the
+    result itself where the config names no objective."""
+    if key is None or not isinstance(result, Mapping):
+        return result
+    value = result.get(key)
+    return None if value is None else float(value)
 
 
 def run_dir() -> Path:

@@ -31,7 +31,7 @@ AUTO = "auto"  # rule=auto: a shipped model's recorded default rule, else map
 
 def check_discover(cfg: DictConfig) -> None:
     """The settings keyin-discover reads before it loads anything."""
-    for key, what in (("ckpt", "<run dir>/checkpoints/keyframes/last.ckpt of a keyin-train run"),
+    for key, what in (("ckpt", "<run dir>/best (or <run dir>/checkpoints/keyframes/last.ckpt) of a keyin-train run"),
                       ("input", "a video file, a folder of videos or of PNG/JPG frames, an .npy/.npz, a robomimic "
                                 ".hdf5 or a LeRobot v2 folder")):
         if cfg[key] is None:

@@ -17,11 +17,11 @@ from omegaconf import DictConfig, OmegaConf
 
 from keyin.cli.app import config_choice, finished_metrics, keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, check_training, is_two_stage
-from keyin.cli.tracking import job_logger
+from keyin.cli.tracking import job_logger, log_config, log_results, namespace
 from keyin.data.datamodule import ClipDataModule, split_clips
 from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
-from keyin.lit.checkpoints import load_checkpoint, load_stage1, warm_start
+from keyin.lit.checkpoints import best_of, load_checkpoint, load_stage1, warm_start
 from keyin.lit.run import fit_stage
 from keyin.pretrained import is_pretrained
 
@@ -52,12 +52,13 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
         interpolator = instantiate(cfg.model.interpolator)
         if cfg.backbone.frozen_frames:  # backbone=frames: a frame autoencoder's encoder and decoder
             interpolator.load_frame_model(load_checkpoint(cfg.backbone.frames_ckpt, "frames"), cfg.backbone.frames_ckpt)
-        fit_stage(
-            interpolator,
-            datamodule=datamodule(scale.stage1_batch_size),
-            max_steps=scale.stage1_steps,
-            **dict(common, run_dir=stage1_folder),
-        )
+        with namespace(common["logger"], "stage1"):  # in the trackers: stage1/train/..., then the method's train/...
+            fit_stage(
+                interpolator,
+                datamodule=datamodule(scale.stage1_batch_size),
+                max_steps=scale.stage1_steps,
+                **dict(common, run_dir=stage1_folder),
+            )
     if cfg.stage == "interpolator":
         return {}
     stage1 = load_stage1(stage1_checkpoint(cfg, stage1_folder))
@@ -79,7 +80,11 @@ def train(cfg: DictConfig) -> dict | None:
         return finished
     L.seed_everything(cfg.seed, workers=True)
     with job_logger(cfg.logger) as logger:
-        return fit_and_score(cfg, folder, logger)
+        log_config(logger, cfg, config_choice("scale"))
+        metrics = fit_and_score(cfg, folder, logger)
+        if metrics is not None:
+            log_results(logger, metrics)
+        return metrics
 
 
 def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict | None:
@@ -120,7 +125,20 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         metrics = dict(module.test_metrics(test, folder), method=cfg.model.name)
     else:
         return None
+    metrics.update(best_checkpoints(cfg, folder))
     return record_metrics(dict(metrics, **times, score_seconds=round(time.perf_counter() - started, 1)), cfg, folder)
+
+
+def best_checkpoints(cfg: DictConfig, folder: Path) -> dict:
+    """``best``: per stage of the run, its ``best.ckpt``'s monitored metric, value and step (a stage 1
+    shared through ``stage1_dir`` included); ``val_f1_best`` and ``val_f1_best_step``: those of the stage
+    monitored by validation F1 (the objective of a tuning sweep: ``objective``), None for a model without one."""
+    folders = sorted((folder / "checkpoints").glob("*/"))
+    if cfg.stage1_dir and is_two_stage(cfg.model):
+        folders.append(Path(cfg.stage1_dir) / "checkpoints" / "interpolator")
+    best = {path.name: found for path in folders if (found := best_of(path)) is not None}
+    by_f1 = next((found for found in best.values() if found["monitor"] == "val/f1"), None)
+    return {"best": best, "val_f1_best": by_f1 and by_f1["value"], "val_f1_best_step": by_f1 and by_f1["step"]}
 
 
 def scores_test_split(cfg: DictConfig) -> bool:

@@ -20,7 +20,9 @@ from keyin.pretrained import full_precision, resolve
 CONFIG_KEY = "keyin_config"
 STAGE_KEY = "keyin_stage"
 VERSION_KEY = "keyin_version"
-PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt)"
+PASS_A_CHECKPOINT = "pass one that keyin-train wrote (<run dir>/checkpoints/<stage>/last.ckpt, or <run dir>/best)"
+BEST, LAST = "best", "last"  # each stage's checkpoints/<stage>/{best,last}.ckpt (keyin.lit.run.stage_checkpoints)
+FINAL_STAGES = ("keyframes", "surprise", "tap", "frames", "interpolator")  # a run's model: its last stage first
 
 
 class RunConfigInCheckpoint(L.Callback):
@@ -49,16 +51,36 @@ STAGE_CHECKPOINTS = {
 }
 
 
+def run_checkpoint(path: Path) -> Path:
+    """``<run dir>/best`` or ``<run dir>/last``: that checkpoint of the run's model (its last stage:
+    ``checkpoints/keyframes/best.ckpt`` of a KEYIN run); any other path unchanged."""
+    if path.name not in (BEST, LAST) or path.exists():
+        return path
+    stages = [path.parent / "checkpoints" / stage / f"{path.name}.ckpt" for stage in FINAL_STAGES]
+    return next((file for file in stages if file.is_file()), path)
+
+
+def best_of(folder: Path) -> dict[str, Any] | None:
+    """The monitored metric, value and step of ``<folder>/best.ckpt`` (a stage's checkpoint folder), None without one."""
+    path = Path(folder) / f"{BEST}.ckpt"
+    if not path.is_file():
+        return None
+    checkpoint = torch.load(path, map_location="cpu", weights_only=True, mmap=True)
+    state = next(state for key, state in checkpoint["callbacks"].items() if key.startswith("ModelCheckpoint") and state["monitor"])
+    return {"monitor": state["monitor"], "value": float(state["best_model_score"]), "step": checkpoint["global_step"]}
+
+
 def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any]:
     """Load a keyin checkpoint without running any pickled code (``weights_only=True``).
 
     Args:
-        path: a checkpoint file, or ``pretrained:<name>`` for one shipped with keyin (:mod:`keyin.pretrained`).
+        path: a checkpoint file, ``<run dir>/best`` or ``<run dir>/last`` (:func:`run_checkpoint`), or
+            ``pretrained:<name>`` for one shipped with keyin (:mod:`keyin.pretrained`).
         stage: the stage to insist on ("interpolator", "keyframes", "surprise", "tap", "frames"); None accepts any.
     Raises:
         CheckpointError: missing file, unsafe or foreign content, or another stage.
     """
-    path = resolve(path)
+    path = run_checkpoint(resolve(path))
     if not path.is_file():
         raise CheckpointError(f"checkpoint {path} does not exist; pass the path of a keyin checkpoint")
     try:

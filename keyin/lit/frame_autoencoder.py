@@ -51,6 +51,7 @@ class FrameAutoencoderModule(L.LightningModule):
     """
 
     stage = "frames"
+    monitor = ("val/bce_per_frame", "min")  # best.ckpt: reconstruction error on the validation clips
 
     def __init__(
         self,
@@ -69,7 +70,7 @@ class FrameAutoencoderModule(L.LightningModule):
         super().__init__()
         if frames_per_clip < 1:
             raise ValueError(f"frames_per_clip={frames_per_clip} must be >= 1")
-        self.save_hyperparameters()
+        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
         self.network = FrameAutoencoder(image_size, channels, conv_width, embed_dim, coord_channels, norm)
 
     def reconstruction(self, clips: torch.Tensor, clip: torch.Tensor, frame: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

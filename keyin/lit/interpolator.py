@@ -32,6 +32,7 @@ class InterpolatorModule(L.LightningModule):
     """Stage 1 of KEYIN; its encoder, decoder and interpolator are frozen in stage 2."""
 
     stage = "interpolator"
+    monitor = ("val/bce_per_frame", "min")  # best.ckpt: interpolation error of every validation segment
 
     def __init__(
         self,
@@ -63,7 +64,7 @@ class InterpolatorModule(L.LightningModule):
         super().__init__()
         if not 1 <= offset_min <= offset_max <= max_offset:
             raise ValueError(f"interpolator offsets [{offset_min}, {offset_max}] must lie in [1, max_offset={max_offset}]")
-        self.save_hyperparameters()
+        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
         self.encoder, self.decoder, self.interpolator = stage1_networks(self.hparams)
         self.posterior = InterpolatorPosterior(embed_dim, latent_dim, lstm_hidden) if latent_dim else None
         self.segment_rng = torch.Generator().manual_seed(0)
@@ -171,8 +172,9 @@ class InterpolatorModule(L.LightningModule):
         table = self.offset_contrast(batch)
         straight = torch.tensor([row["straight"] for row in table.values()]).nanmean()
         bent = torch.tensor([row["bent"] for row in table.values()]).nanmean()
+        every = torch.tensor([row["all"] for row in table.values()]).nanmean()  # the stage's validation loss
         self.log_dict(
-            {"val/bce_straight": straight, "val/bce_bent": bent, "val/contrast": bent - straight},
+            {"val/bce_per_frame": every, "val/bce_straight": straight, "val/bce_bent": bent, "val/contrast": bent - straight},
             prog_bar=True,
             sync_dist=True,  # under DDP: the mean over the ranks' first batches
         )

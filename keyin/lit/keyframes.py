@@ -41,6 +41,7 @@ class KeyframeModule(L.LightningModule):
     """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``)."""
 
     stage = "keyframes"
+    monitor = ("val/f1", "max")  # best.ckpt: keyframe F1 on the validation clips
 
     def __init__(
         self,
@@ -94,7 +95,7 @@ class KeyframeModule(L.LightningModule):
                 f"entropy_bonus must be >= 0 and, when > 0, decay over entropy_bonus_steps >= 1 steps; "
                 f"got {entropy_bonus} over {entropy_bonus_steps}"
             )
-        self.save_hyperparameters()
+        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
         encoder, decoder, interpolator = stage1_networks(stage1)
         predictor = KeyframePredictor(
             stage1["embed_dim"], n_keyframes, stage1["max_offset"], latent_dim, lstm_hidden, lstm_layers,

@@ -4,7 +4,7 @@ For modules with ``validation_pictures`` (KEYIN's stage 2 and Surprise): clips w
 marked (``pictures/val_step<N>.png`` and ``.gif``; stage 2: ground truth, reconstruction and a prior
 sample; Surprise: ground truth and its one-step predictions), and a chart of the keyframe evidence:
 stage 2's histogram of chosen offsets (``pictures/offsets_step<N>.png``), Surprise's KL curves
-(``pictures/surprise_step<N>.png``). TensorBoard and wandb loggers also receive them.
+(``pictures/surprise_step<N>.png``). TensorBoard and wandb loggers also receive the PNGs (the GIFs stay in the folder).
 """
 
 from __future__ import annotations

@@ -14,8 +14,9 @@ from lightning.pytorch.callbacks import ModelCheckpoint
 
 from keyin.errors import KeyinError
 from keyin.io import remove_stale_temporaries
-from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
+from keyin.lit.checkpoints import BEST, AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
+from keyin.lit.progress import StepProgressBar
 
 
 log = logging.getLogger(__name__)
@@ -73,6 +74,23 @@ def compile_frame_networks(module: L.LightningModule) -> list[str]:
     return names
 
 
+def logging_interval(configured: int, max_steps: int) -> int:
+    """Steps between logged training scalars: ``trainer.log_every_n_steps``, or a tenth of a shorter
+    stage's steps (every step of a stage under 20 steps), so that every stage's curves reach the loggers."""
+    return max(1, min(configured, max_steps // 10))
+
+
+def stage_checkpoints(folder: Path, module: L.LightningModule, checkpoint_every: int) -> list[ModelCheckpoint]:
+    """``last.ckpt`` every ``checkpoint_every`` steps, and ``best.ckpt`` at the validation that scored best
+    by the module's ``monitor`` (name, "min" or "max"), in ``folder``."""
+    monitor, mode = module.monitor
+    return [
+        ModelCheckpoint(dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=checkpoint_every),
+        ModelCheckpoint(dirpath=folder, filename=BEST, monitor=monitor, mode=mode, save_top_k=1,
+                        auto_insert_metric_name=False, enable_version_counter=False),
+    ]
+
+
 def fit_stage(
     module: L.LightningModule,
     datamodule: L.LightningDataModule,
@@ -87,6 +105,7 @@ def fit_stage(
 ) -> Path:
     """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present;
     a stage that has reached ``max_steps`` already is only loaded (its file keeps its bytes and hash).
+    Beside ``last.ckpt`` the stage keeps ``best.ckpt`` (:func:`stage_checkpoints`).
 
     ``compile_networks`` compiles each of the module's networks in place with ``torch.compile``
     (``nn.Module.compile``: parameter names, so checkpoints, stay the same).
@@ -99,17 +118,17 @@ def fit_stage(
             network.compile()
     folder = Path(run_dir) / "checkpoints" / module.stage
     last = folder / "last.ckpt"
-    checkpoints = ModelCheckpoint(
-        dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=checkpoint_every
-    )
+    trainer_kwargs = dict(trainer_kwargs)
+    trainer_kwargs["log_every_n_steps"] = logging_interval(trainer_kwargs.get("log_every_n_steps", 50), max_steps)
+    progress = [StepProgressBar()] if trainer_kwargs.get("enable_progress_bar", True) else []
     trainer = L.Trainer(
         **trainer_kwargs,
         max_steps=max_steps,
         val_check_interval=val_every,
         check_val_every_n_epoch=None,
         logger=logger,
-        callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures"),
-                   FinalCheckpoint(last)],
+        callbacks=[*stage_checkpoints(folder, module, checkpoint_every), RunConfigInCheckpoint(config), FiniteLoss(),
+                   ValidationPictures(Path(run_dir) / "pictures"), FinalCheckpoint(last), *progress],
         default_root_dir=str(run_dir),
         plugins=[AtomicCheckpointIO()],
     )
@@ -123,6 +142,7 @@ def fit_stage(
             module.load_state_dict(saved["state_dict"])
             return last
     with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Checkpoint directory .* exists and is not empty")  # resumed here by design
         frozen = getattr(module, "frozen_by_design", None)
         if frozen:  # frozen networks are in eval mode by design: said once, in our words
             warnings.filterwarnings("ignore", message=r"Found \d+ module\(s\) in eval mode")

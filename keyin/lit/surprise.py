@@ -46,6 +46,7 @@ class SurpriseModule(L.LightningModule):
     """
 
     stage = "surprise"
+    monitor = ("val/f1", "max")  # best.ckpt: keyframe F1 on the validation clips
 
     def __init__(
         self, image_size: int, channels: int, n_cond: int, n_future: int, n_keyframes: int, embed_dim: int,
@@ -54,7 +55,7 @@ class SurpriseModule(L.LightningModule):
         beta_delay: int = 0, foreground_weight: float = 1.0, foreground_threshold: float = 0.1, skips: bool = False,
     ) -> None:
         super().__init__()
-        self.save_hyperparameters()
+        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
         conv = dict(
             image_size=image_size, channels=channels, width=conv_width, embed_dim=embed_dim,
             coord_channels=coord_channels, norm=norm,

@@ -44,6 +44,7 @@ class TAPModule(L.LightningModule):
     """
 
     stage = "tap"
+    monitor = ("val/loss", "min")  # best.ckpt: its loss on the validation clips
 
     def __init__(
         self,
@@ -65,7 +66,7 @@ class TAPModule(L.LightningModule):
         ae_weight: float = 0.0,
     ) -> None:
         super().__init__()
-        self.save_hyperparameters()
+        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
         if margin < 0:
             raise ValueError(f"TAP's margin={margin} must be >= 0")
         self.least_gap = shortest_gap(margin) if min_gap is None else min_gap

@@ -79,7 +79,7 @@ def offset_contrast(
         last: (B,) each clip's last valid frame; segments reaching past it are left out.
         first: the first frame a segment may start at (K^0, the last conditioning frame).
     Returns:
-        ``{offset: {"straight": mean, "bent": mean}}`` for offsets 1..S (NaN where none).
+        ``{offset: {"straight": mean, "bent": mean, "all": mean}}`` for offsets 1..S (NaN where none).
     """
     table = {}
     for offset in range(1, max_offset + 1):
@@ -92,5 +92,6 @@ def offset_contrast(
         table[offset] = {
             "straight": per_frame[~bent].mean().item() if (~bent).any() else float("nan"),
             "bent": per_frame[bent].mean().item() if bent.any() else float("nan"),
+            "all": per_frame.mean().item() if len(per_frame) else float("nan"),
         }
     return table

@@ -1,4 +1,5 @@
-"""fit_stage's final checkpoint: the full state at the last step, saved while the fit's own loader runs."""
+"""fit_stage's checkpoints: the final one, the full state at the last step, saved while the fit's own
+loader runs; and the best by the module's monitored validation metric."""
 
 import lightning as L
 import torch
@@ -20,6 +21,7 @@ class Numbers(Dataset):
 
 class Line(L.LightningModule):
     stage = "line"
+    monitor = ("val_loss", "min")  # what fit_stage keeps best.ckpt by
 
     def __init__(self) -> None:
         super().__init__()
@@ -49,3 +51,4 @@ def test_the_last_checkpoint_holds_the_final_step_and_starts_no_extra_loader_wor
     assert saved["global_step"] == 5 and saved["optimizer_states"]  # the last step, off the cadence of 4
     assert len(started) == 1  # the fit's loader only: the final state is read from its worker
     assert saved["loops"]["fit_loop"]["state_dict"]["combined_loader"][0]["_snapshot"]["_snapshot_step"] == 5  # where it stopped
+    assert load_checkpoint(tmp_path / "checkpoints" / "line" / "best.ckpt")["global_step"] == 4  # its one validation

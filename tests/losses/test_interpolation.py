@@ -50,7 +50,7 @@ def test_offset_contrast_splits_segments_at_labelled_keyframes():
     table = offset_contrast(score, keyframes, last=torch.tensor([5]), first=1, max_offset=3)
     # frames 1..5: offset 1 never bends, offset 2 bends at starts 1 and 2 only, both offset-3 segments bend
     assert table[1]["straight"] == 1.0 and table[1]["bent"] != table[1]["bent"]
-    assert table[2] == {"straight": 1.0, "bent": 2.0}
+    assert table[2] == {"straight": 1.0, "bent": 2.0, "all": pytest.approx(4 / 3)}  # all: every segment (two straight, one bent)
     assert table[3]["bent"] == 2.0 and table[3]["straight"] != table[3]["straight"]
 
 
