@@ -13,7 +13,7 @@ from torchdata.stateful_dataloader import StatefulDataLoader
 from keyin.data.clips import GeneratedClips, ShardClips
 from keyin.data.generate import split_seed
 from keyin.data.hdf5 import split_files
-from keyin.errors import DatasetFormatError
+from keyin.errors import ConfigError, DatasetFormatError
 
 
 def split_clips(
@@ -35,8 +35,25 @@ def split_clips(
     return clips if size is None else Subset(clips, range(min(size, len(clips))))
 
 
+def rank_batch_size(batch_size: int, world_size: int) -> int:
+    """Clips each of ``world_size`` processes loads per step when ``batch_size`` is the global batch
+    (``scale.batch_size``, ``scale.stage1_batch_size``), so that a step averages the same number of
+    clips on any number of processes.
+
+    Raises:
+        ConfigError: the global batch does not split evenly.
+    """
+    if batch_size % world_size:
+        raise ConfigError(
+            f"the batch of {batch_size} clips (scale.batch_size / scale.stage1_batch_size, the global batch) does not "
+            f"split evenly over {world_size} processes; pick a multiple of {world_size}"
+        )
+    return batch_size // world_size
+
+
 class ClipDataModule(L.LightningDataModule):
-    """Shuffled training clips (resumable mid-epoch) and a fixed validation set."""
+    """Shuffled training clips (resumable mid-epoch) and a fixed validation set; ``batch_size`` is
+    the global batch, which DDP's processes share evenly (:func:`rank_batch_size`)."""
 
     def __init__(self, train: Dataset, val: Dataset, batch_size: int, num_workers: int) -> None:
         super().__init__()
@@ -56,7 +73,7 @@ class ClipDataModule(L.LightningDataModule):
             warnings.filterwarnings("ignore", message="'set_vital' is deprecated")
             return StatefulDataLoader(
                 self.train,
-                batch_size=self.batch_size,
+                batch_size=rank_batch_size(self.batch_size, self.trainer.world_size if self.trainer else 1),
                 shuffle=True,
                 drop_last=True,
                 num_workers=self.num_workers,

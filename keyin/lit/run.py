@@ -16,6 +16,7 @@ from keyin.errors import KeyinError
 from keyin.io import remove_stale_temporaries
 from keyin.lit.checkpoints import AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
+from keyin.lit.ranks import RankSeeds
 
 
 log = logging.getLogger(__name__)
@@ -109,7 +110,7 @@ def fit_stage(
         check_val_every_n_epoch=None,
         logger=logger,
         callbacks=[checkpoints, RunConfigInCheckpoint(config), FiniteLoss(), ValidationPictures(Path(run_dir) / "pictures"),
-                   FinalCheckpoint(last)],
+                   FinalCheckpoint(last), RankSeeds(config.get("seed", 0))],
         default_root_dir=str(run_dir),
         plugins=[AtomicCheckpointIO()],
     )

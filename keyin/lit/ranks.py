@@ -1,0 +1,26 @@
+"""Data-parallel training (DDP) in keyin's terms: which process is rank 0 and each rank's own random
+draws (the share of the global batch each rank loads: keyin.data.datamodule.rank_batch_size)."""
+
+from __future__ import annotations
+
+import lightning as L
+from lightning.fabric.utilities.seed import seed_everything
+from lightning.pytorch.utilities import rank_zero_only
+
+
+def is_rank_zero() -> bool:
+    """Whether this process is rank 0 (always, without DDP): it alone scores a run and writes its metrics."""
+    return rank_zero_only.rank == 0
+
+
+class RankSeeds(L.Callback):
+    """Under DDP, rank r reseeds every generator with ``seed + r`` when the fit starts, so the ranks
+    draw different segments, frames and noise and the run is still fixed by its seed (the weights
+    start equal: DDP copies rank 0's). One process keeps the draws it always had."""
+
+    def __init__(self, seed: int) -> None:
+        self.seed = seed
+
+    def on_fit_start(self, trainer: L.Trainer, module: L.LightningModule) -> None:
+        if trainer.world_size > 1:
+            seed_everything(self.seed + trainer.global_rank, workers=True, verbose=False)
