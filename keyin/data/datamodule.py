@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 from typing import Any, Mapping
 
 import lightning as L
+import torch
 from torch.utils.data import DataLoader, Dataset, Subset
 from torchdata.stateful_dataloader import StatefulDataLoader
 
@@ -69,12 +71,17 @@ class ClipDataModule(L.LightningDataModule):
     def train_dataloader(self) -> StatefulDataLoader:
         """Shuffled batches from a loader whose position Lightning keeps in every checkpoint, so a
         run resumed mid-epoch continues the epoch's order instead of starting it again."""
+        world = self.trainer.world_size if self.trainer else 1
+        # Under DDP every rank shuffles alike and Lightning's sampler hands each its share; the ranks'
+        # own generators differ (keyin.lit.ranks.RankSeeds), so the order has its own, from the run's seed.
+        order = torch.Generator().manual_seed(int(os.environ.get("PL_GLOBAL_SEED", 0))) if world > 1 else None
         with warnings.catch_warnings():  # torchdata 0.11 calls a deprecated torch telemetry hook
             warnings.filterwarnings("ignore", message="'set_vital' is deprecated")
             return StatefulDataLoader(
                 self.train,
-                batch_size=rank_batch_size(self.batch_size, self.trainer.world_size if self.trainer else 1),
+                batch_size=rank_batch_size(self.batch_size, world),
                 shuffle=True,
+                generator=order,
                 drop_last=True,
                 num_workers=self.num_workers,
                 persistent_workers=self.num_workers > 0,

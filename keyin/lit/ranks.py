@@ -3,8 +3,11 @@ draws (the share of the global batch each rank loads: keyin.data.datamodule.rank
 
 from __future__ import annotations
 
+import random
+
 import lightning as L
-from lightning.fabric.utilities.seed import seed_everything
+import numpy as np
+import torch
 from lightning.pytorch.utilities import rank_zero_only
 
 
@@ -14,13 +17,19 @@ def is_rank_zero() -> bool:
 
 
 class RankSeeds(L.Callback):
-    """Under DDP, rank r reseeds every generator with ``seed + r`` when the fit starts, so the ranks
-    draw different segments, frames and noise and the run is still fixed by its seed (the weights
-    start equal: DDP copies rank 0's). One process keeps the draws it always had."""
+    """Under DDP, rank r reseeds torch's, numpy's and Python's generators with ``seed + r`` when the fit
+    starts, so the ranks draw different segments, frames and noise and the run is still fixed by its
+    seed (the weights start equal: DDP copies rank 0's). One process keeps the draws it always had.
+    Not ``seed_everything``: it would set ``PL_GLOBAL_SEED``, the seed of the distributed sampler's
+    shuffle, which must be one for all ranks or their shares of the data overlap (loader workers
+    add the rank to it already)."""
 
     def __init__(self, seed: int) -> None:
         self.seed = seed
 
     def on_fit_start(self, trainer: L.Trainer, module: L.LightningModule) -> None:
         if trainer.world_size > 1:
-            seed_everything(self.seed + trainer.global_rank, workers=True, verbose=False)
+            seed = self.seed + trainer.global_rank
+            random.seed(seed)
+            np.random.seed(seed)
+            torch.manual_seed(seed)

@@ -25,13 +25,12 @@ BACKBONES = {
 
 def stage1(backbone: str = "ours", latent_dim: int = 2, **options) -> InterpolatorModule:
     torch.manual_seed(0)
-    frame_model = dict(BACKBONES[backbone])
-    return InterpolatorModule(
-        **CONV, **{key: frame_model.pop(key) for key in ("norm", "coord_channels", "step_input", "offset_min")},
-        n_cond=N_COND, n_future=N_FUTURE, max_offset=MAX_OFFSET, latent_dim=latent_dim, lstm_hidden=8, lstm_layers=1,
-        mlp_hidden=8, offset_max=MAX_OFFSET, kl_weight=0.1, ae_weight=1.0, lr=1e-3, ae_frames=4, diagnostic_clips=4,
-        **frame_model, **options,
+    settings = dict(
+        **CONV, **BACKBONES[backbone], n_cond=N_COND, n_future=N_FUTURE, max_offset=MAX_OFFSET, latent_dim=latent_dim,
+        lstm_hidden=8, lstm_layers=1, mlp_hidden=8, offset_max=MAX_OFFSET, kl_weight=0.1, ae_weight=1.0, lr=1e-3,
+        ae_frames=4, diagnostic_clips=4,
     )
+    return InterpolatorModule(**{**settings, **options})
 
 
 def stage2(backbone: str = "ours", **options) -> KeyframeModule:
