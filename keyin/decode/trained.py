@@ -18,7 +18,7 @@ from keyin.decode.names import BOUNDARY_SCORE_RULES, VARIANT_RULES
 from keyin.decode.rules import MAP_CANDIDATE_LOGIT, keyin_keyframe_probabilities, keyin_keyframes, map_pruned_segments
 from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KeyframeCost
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from keyin.losses.image import future_pixel_weights, model_pixel_weights, plain_bce
 from keyin.models import KEYIN, KeyframePredictor
 from keyin.models.keyin import stage1_networks

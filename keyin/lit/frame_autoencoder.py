@@ -20,7 +20,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from keyin.data.segments import valid_frames
 from keyin.eval.placement import FramePlacement, frame_placements
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.models import FrameAutoencoder
 from keyin.viz.keyframes import save_keyframe_pictures

@@ -20,7 +20,7 @@ from keyin.decode.teacher import teacher_loss
 from keyin.decode.trained import KeyframeRules, keyin_model
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.legacy import upgrade_state_dict
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from keyin.losses.image import future_pixel_weights
 from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
 from keyin.models.distributions import gaussian_kl
