@@ -21,7 +21,7 @@ from hydra.errors import ConfigCompositionException, InstantiationException, Ove
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
-import keyin.cli.tracking  # noqa: F401  (registers the logger configs' resolvers)
+import keyin.cli.naming  # noqa: F401  (registers the logger configs' resolvers)
 from keyin import __version__
 from keyin.cli.checks import moved_key_message
 from keyin.errors import KeyinError

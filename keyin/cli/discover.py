@@ -7,23 +7,19 @@ import functools
 import sys
 from collections import defaultdict
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 from omegaconf import DictConfig
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import optional_name, require_int_at_least, require_positive_int
-from keyin.data.frames import fit_note
-from keyin.data.imports import ImportedVideo, ImportSpec, read_videos
-from keyin.data.labels import check_known, read_labels
-from keyin.decode.rules import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES
-from keyin.decode.segmentation import KNEE
+from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES, KNEE, SEGMENT_COST_RULES
 from keyin.errors import ConfigError, DatasetFormatError
-from keyin.lit.registry import load_trained_module
-from keyin.lit.run import compile_frame_networks
-from keyin.losses.image import plain_bce
-from keyin.pretrained import recorded_rule
-from keyin.pipelines.discover import discover_videos
+
+if TYPE_CHECKING:  # torch, the model and the video readers are imported when the command runs: --help answers at once
+    from keyin.data.imports import ImportedVideo, ImportSpec
+
+BATCH_SIZES = {"cpu": 32, "gpu": 256}  # batch_size=null: windows per model call on each kind of device
 
 
 AUTO = "auto"  # rule=auto: a shipped model's recorded default rule, else map
@@ -46,8 +42,9 @@ def check_discover(cfg: DictConfig) -> None:
     if logit is not None and not (isinstance(logit, (int, float)) and not isinstance(logit, bool)):
         raise ConfigError(f"candidate_logit={logit!r} must be a number (rule=map_pruned's least boundary logit of a "
                           f"keyframe, e.g. -4) or null for the checkpoint's")
-    for key in ("frame_stride", "batch_size"):
-        require_positive_int(cfg[key], key)
+    require_positive_int(cfg.frame_stride, "frame_stride")
+    if cfg.batch_size is not None:
+        require_positive_int(cfg.batch_size, "batch_size")
     require_int_at_least(cfg.seam, "seam", 0)
     if cfg.fps is not None and not (isinstance(cfg.fps, (int, float)) and cfg.fps > 0):
         raise ConfigError(f"fps={cfg.fps!r} must be a positive number (frames per second) or null")
@@ -68,6 +65,10 @@ def window_stride(cfg: DictConfig, n_future: int) -> int:
 def read_input(cfg: DictConfig, spec: ImportSpec) -> list[ImportedVideo]:
     """Every video of ``input=`` decoded, checked and fitted to the model (and its labels checked)
     before anything is written; notes on the fitting and warnings on skipped videos to stderr."""
+    from keyin.data.frames import fit_note
+    from keyin.data.imports import read_videos
+    from keyin.data.labels import check_known, read_labels
+
     labels_path = Path(cfg.labels) if cfg.labels else None
     labels = read_labels(labels_path) if labels_path else None
     videos, skipped, seen = read_videos(Path(cfg.input), spec, labels, labels_path, cfg.progress, "reading", "input")
@@ -91,6 +92,8 @@ def read_input(cfg: DictConfig, spec: ImportSpec) -> list[ImportedVideo]:
 def chosen_rule(cfg: DictConfig, module: Any) -> str:
     """``rule=``, where ``auto`` is a shipped model's recorded default (the cheapest rule within 0.01
     of ``map`` on its validation clips, said on stderr) and otherwise ``map``; null: the model's own."""
+    from keyin.pretrained import recorded_rule
+
     if cfg.rule != AUTO:
         return cfg.rule or module.hparams.discovery
     recorded = recorded_rule(cfg.ckpt)
@@ -121,11 +124,20 @@ def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> di
 @user_errors
 def discover(cfg: DictConfig) -> dict:
     check_discover(cfg)
-    module, trained = load_trained_module(cfg.ckpt, stage="keyframes")
+    from keyin.data.imports import ImportSpec
+    from keyin.devices import batch_size_on, choose_device, device_record
+    from keyin.lit.registry import load_trained_module
+    from keyin.losses.image import plain_bce
+    from keyin.pipelines.discover import discover_videos
+
+    device = choose_device(cfg.device)
+    module, trained = load_trained_module(cfg.ckpt, stage="keyframes", device=device)
     if cfg.candidate_logit is not None:  # rule=map_pruned reads it from the module
         module.hparams.map_candidate_logit = float(cfg.candidate_logit)
     model = model_record(cfg, module, trained)
     if cfg.compile:
+        from keyin.lit.run import compile_frame_networks  # Lightning, only for this
+
         compile_frame_networks(module)
     n_cond, n_future = model["n_cond"], model["n_future"]
     stride = window_stride(cfg, n_future)
@@ -133,14 +145,16 @@ def discover(cfg: DictConfig) -> dict:
                       frame_stride=cfg.frame_stride, window_stride=stride, binary=bool(cfg.binary), fps=cfg.fps,
                       camera_key=optional_name(cfg.camera_key))
     videos = read_input(cfg, spec)
+    batch_size = batch_size_on(device, cfg.batch_size, **BATCH_SIZES)
+    ran = {**device_record(device), "batch_size": batch_size}
     discoverer = functools.partial(module.discover, discovery=model["rule"], keyframe_cost=model["keyframe_cost"])
     summary = discover_videos(
-        videos, discoverer, module.keyframe_probabilities, run_dir(), model, n_cond, n_future, cfg.frame_stride,
-        stride, seam=cfg.seam, batch_size=cfg.batch_size, progress=cfg.progress, pictures=bool(cfg.pictures),
-        video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
+        videos, discoverer, module.keyframe_probabilities, run_dir(), {**model, **ran}, n_cond, n_future,
+        cfg.frame_stride, stride, seam=cfg.seam, batch_size=batch_size, progress=cfg.progress,
+        pictures=bool(cfg.pictures), video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
         segments=module.map_pruned_segments if model["rule"] == "map_pruned" and plain_bce(module.hparams.stage1) else None,
     )
-    summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"])
+    summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"], **ran)
     write_metrics(summary, run_dir())
     return summary
 

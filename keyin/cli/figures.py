@@ -20,6 +20,7 @@ from keyin.cli.checks import require_int_at_least, require_positive_int, require
 from keyin.cli.eval import eval_clips, eval_files
 from keyin.data.clips import ShardClips
 from keyin.data.hdf5 import load_arrays
+from keyin.devices import choose_device, device_record
 from keyin.errors import ConfigError
 from keyin.io import atomic_write_text
 from keyin.lit.registry import load_trained_module
@@ -41,7 +42,7 @@ def stage2_model(cfg: DictConfig, key: str) -> tuple[KEYIN, dict[str, Any]]:
             f"figure={cfg.figure} needs {key}=<run dir>/checkpoints/keyframes/last.ckpt, the stage-2 checkpoint "
             f"of a KEYIN, Jumpy or Static run"
         )
-    module, trained = load_trained_module(cfg[key], stage="keyframes")
+    module, trained = load_trained_module(cfg[key], stage="keyframes", device=choose_device(cfg.device))
     return module.model, trained
 
 
@@ -124,7 +125,8 @@ def figures(cfg: DictConfig) -> dict[str, Any]:
     torch.manual_seed(cfg.seed)  # the prior samples
     numbers = DRAW[cfg.figure](cfg, model, trained, clips, path)
     numbers = {"figure": cfg.figure, "png": str(path), "ckpt": str(cfg.ckpt), "model": trained["model"]["name"],
-               "dataset": dataset.name, "seed": cfg.seed, **numbers, "keyin_version": __version__, "machine": machine()}
+               "dataset": dataset.name, "seed": cfg.seed, **numbers, **device_record(choose_device(cfg.device)),
+               "keyin_version": __version__, "machine": machine()}
     atomic_write_text(path.with_suffix(".json"), json.dumps(numbers, indent=1, sort_keys=True))
     write_metrics(numbers, run_dir())
     return numbers

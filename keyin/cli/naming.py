@@ -8,13 +8,19 @@ The resolvers are used by ``conf/hydra_dirs.yaml`` and the logger configs:
 * ``${keyin.job_label:<method>,<dataset>,<seed>,${hydra:job.override_dirname}}``: the run's name in
   TensorBoard and wandb, ``jumpy-brownian-seed1[model=jumpy,seed=1]``;
 * ``${keyin.tracking_dir:${hydra:mode},${hydra:sweep.dir},${hydra:runtime.output_dir}}``: where the
-  TensorBoard runs of a job go: the sweep dir for every job of a sweep, else the run dir.
+  TensorBoard runs of a job go: the sweep dir for every job of a sweep, else the run dir;
+* ``${keyin.wandb_offline:}``: offline unless this machine is logged in to wandb.
+
+No Lightning here: every entry point imports it, and keyin-discover starts without Lightning.
 """
 
 from __future__ import annotations
 
 import hashlib
+import netrc
+import os
 import re
+from pathlib import Path
 from typing import Any
 
 from omegaconf import OmegaConf
@@ -54,10 +60,23 @@ def sweep_group(mode: Any, sweep_dir: str) -> str | None:
     return str(sweep_dir) if str(mode).endswith("MULTIRUN") else None
 
 
+def wandb_logged_in() -> bool:
+    """True if wandb has an API key here: ``WANDB_API_KEY`` or the netrc entry ``wandb login`` writes."""
+    if os.environ.get("WANDB_API_KEY"):
+        return True
+    path = Path(os.environ.get("NETRC", Path.home() / ".netrc"))
+    try:
+        hosts = netrc.netrc(path).hosts
+    except (OSError, netrc.NetrcParseError):
+        return False
+    return any("wandb" in host for host in hosts)
+
+
 for _name, _resolver in {
     "keyin.job_dir": job_dir,
     "keyin.job_label": job_label,
     "keyin.tracking_dir": tracking_dir,
     "keyin.sweep_group": sweep_group,
+    "keyin.wandb_offline": lambda: not wandb_logged_in(),
 }.items():
     OmegaConf.register_new_resolver(_name, _resolver, replace=True)

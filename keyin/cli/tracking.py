@@ -1,18 +1,14 @@
 """Experiment trackers at the edge of a job: online/offline, the job's config and results, stage
 namespaces, finish.
 
-``keyin.cli.naming`` registers the resolvers the logger configs name their runs and groups with;
-``${keyin.wandb_offline:}`` (here): offline unless this machine is logged in to wandb. Everything
-sent to a tracker is sent from rank zero only.
+``keyin.cli.naming`` registers the resolvers the logger configs name their runs and groups with (and
+``${keyin.wandb_offline:}``). Everything sent to a tracker is sent from rank zero only.
 """
 
 from __future__ import annotations
 
 import contextlib
 import math
-import netrc
-import os
-from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 from hydra.utils import instantiate
@@ -26,19 +22,6 @@ TEST_SCORES = ("f1", "f1_interior", "f1_with_ends", "f1_tol1_interior")  # metri
 RESULTS = (*(f"test/{score}" for score in TEST_SCORES), "val/f1_best", "val/f1_best_step")  # TensorBoard's HParams metrics
 
 
-def wandb_logged_in() -> bool:
-    """True if wandb has an API key here: ``WANDB_API_KEY`` or the netrc entry ``wandb login`` writes."""
-    if os.environ.get("WANDB_API_KEY"):
-        return True
-    path = Path(os.environ.get("NETRC", Path.home() / ".netrc"))
-    try:
-        hosts = netrc.netrc(path).hosts
-    except (OSError, netrc.NetrcParseError):
-        return False
-    return any("wandb" in host for host in hosts)
-
-
-OmegaConf.register_new_resolver("keyin.wandb_offline", lambda: not wandb_logged_in(), replace=True)
 
 
 @contextlib.contextmanager

@@ -19,9 +19,11 @@ from keyin.cli.app import config_choice, finished_metrics, keyin_main, run_dir, 
 from keyin.cli.checks import check_common, check_training, is_two_stage
 from keyin.cli.tracking import job_logger, log_config, log_results, namespace
 from keyin.data.datamodule import ClipDataModule, split_clips
+from keyin.devices import choose_device, device_record
 from keyin.errors import CheckpointError
 from keyin.eval.discovery import score_methods
 from keyin.lit.checkpoints import best_of, load_checkpoint, load_stage1, warm_start
+from keyin.lit.ranks import is_rank_zero
 from keyin.lit.run import fit_stage
 from keyin.pretrained import is_pretrained
 
@@ -67,7 +69,7 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
     if cfg.init_ckpt:  # a warm start; a resumed run's last.ckpt then replaces these weights
         warm_start(module, cfg.init_ckpt)
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
-    return module.discoverers(cfg.model.name)
+    return module.to(choose_device(cfg.device)).discoverers(cfg.model.name)  # the fit hands it back on the CPU
 
 
 @user_errors
@@ -90,6 +92,7 @@ def train(cfg: DictConfig) -> dict | None:
 def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict | None:
     """Train the configured model into ``folder`` (logging to ``logger``) and score it on the test split."""
     scale, dataset = cfg.scale, cfg.dataset
+    device = choose_device(cfg.device)  # where the test split is scored; checked before training
     generator = instantiate(dataset.generator)
     clips = lambda split, size: split_clips(dataset, generator, split, size, cfg.data_dir)  # noqa: E731
     datamodule = lambda batch_size: ClipDataModule(  # noqa: E731
@@ -111,10 +114,10 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
     elif "module" in cfg.model:  # one stage (Surprise, TAP)
         module = instantiate(cfg.model.module)
         fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=cfg.model.steps, **common)
-        discoverers = module.discoverers(cfg.model.name)
+        discoverers = module.to(device).discoverers(cfg.model.name)  # the fit hands it back on the CPU
     else:
         discoverers = train_two_stages(cfg, datamodule, common, folder)
-    if not cfg.evaluate:
+    if not cfg.evaluate or not is_rank_zero():  # under DDP, rank 0 alone scores and writes metrics.json
         return None
     # wall times of this process (a resumed job counts its last part only), on torch's threads
     times = {"train_seconds": round(time.perf_counter() - started, 1), "threads": torch.get_num_threads()}
@@ -126,7 +129,8 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
     else:
         return None
     metrics.update(best_checkpoints(cfg, folder))
-    return record_metrics(dict(metrics, **times, score_seconds=round(time.perf_counter() - started, 1)), cfg, folder)
+    times.update(score_seconds=round(time.perf_counter() - started, 1), **device_record(device))
+    return record_metrics(dict(metrics, **times), cfg, folder)
 
 
 def best_checkpoints(cfg: DictConfig, folder: Path) -> dict:

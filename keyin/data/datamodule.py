@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 from typing import Any, Mapping
 
 import lightning as L
+import torch
 from torch.utils.data import DataLoader, Dataset, Subset
 from torchdata.stateful_dataloader import StatefulDataLoader
 
 from keyin.data.clips import GeneratedClips, ShardClips
 from keyin.data.generate import split_seed
 from keyin.data.hdf5 import split_files
-from keyin.errors import DatasetFormatError
+from keyin.errors import ConfigError, DatasetFormatError
 
 
 def split_clips(
@@ -35,8 +37,25 @@ def split_clips(
     return clips if size is None else Subset(clips, range(min(size, len(clips))))
 
 
+def rank_batch_size(batch_size: int, world_size: int) -> int:
+    """Clips each of ``world_size`` processes loads per step when ``batch_size`` is the global batch
+    (``scale.batch_size``, ``scale.stage1_batch_size``), so that a step averages the same number of
+    clips on any number of processes.
+
+    Raises:
+        ConfigError: the global batch does not split evenly.
+    """
+    if batch_size % world_size:
+        raise ConfigError(
+            f"the batch of {batch_size} clips (scale.batch_size / scale.stage1_batch_size, the global batch) does not "
+            f"split evenly over {world_size} processes; pick a multiple of {world_size}"
+        )
+    return batch_size // world_size
+
+
 class ClipDataModule(L.LightningDataModule):
-    """Shuffled training clips (resumable mid-epoch) and a fixed validation set."""
+    """Shuffled training clips (resumable mid-epoch) and a fixed validation set; ``batch_size`` is
+    the global batch, which DDP's processes share evenly (:func:`rank_batch_size`)."""
 
     def __init__(self, train: Dataset, val: Dataset, batch_size: int, num_workers: int) -> None:
         super().__init__()
@@ -52,12 +71,17 @@ class ClipDataModule(L.LightningDataModule):
     def train_dataloader(self) -> StatefulDataLoader:
         """Shuffled batches from a loader whose position Lightning keeps in every checkpoint, so a
         run resumed mid-epoch continues the epoch's order instead of starting it again."""
+        world = self.trainer.world_size if self.trainer else 1
+        # Under DDP every rank shuffles alike and Lightning's sampler hands each its share; the ranks'
+        # own generators differ (keyin.lit.ranks.RankSeeds), so the order has its own, from the run's seed.
+        order = torch.Generator().manual_seed(int(os.environ.get("PL_GLOBAL_SEED", 0))) if world > 1 else None
         with warnings.catch_warnings():  # torchdata 0.11 calls a deprecated torch telemetry hook
             warnings.filterwarnings("ignore", message="'set_vital' is deprecated")
             return StatefulDataLoader(
                 self.train,
-                batch_size=self.batch_size,
+                batch_size=rank_batch_size(self.batch_size, world),
                 shuffle=True,
+                generator=order,
                 drop_last=True,
                 num_workers=self.num_workers,
                 persistent_workers=self.num_workers > 0,

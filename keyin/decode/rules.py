@@ -13,16 +13,13 @@ import torch
 from torch import Tensor
 
 from keyin.decode.ends import sequence_ends, with_ends
+from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES, VARIANT_RULES  # noqa: F401
 from keyin.decode.offsets import keyframe_probabilities, offset_keyframes
 from keyin.decode.segment_costs import boundary_segment_costs, candidate_segments, interpolation_costs
 from keyin.decode.segmentation import KeyframeCost, decode_by_length
 from keyin.losses.image import future_pixel_weights
 from keyin.models.keyin import KEYIN
 
-KEYIN_RULES = ("offsets", "boundaries", "map", "map_pruned", "segmentation")
-VARIANT_RULES = ("offsets", "boundaries", "map")  # scored beside a model's own rule when it has offset evidence
-SEGMENT_COST_RULES = ("map", "map_pruned", "segmentation")  # the rules that read the segments' interpolation BCE
-BOUNDARY_SCORE_RULES = ("boundaries", "map_pruned")  # the rules that read stage 2's boundary scores (offset_evidence)
 # The rules by their cost per kept frame, cheapest first: boundaries and offsets run the encoder and the
 # posterior once (~0.3 ms per kept frame at Brownian size), map also decodes every segment's frames (~7 ms
 # in keyin-discover), map_pruned only those of the segments between candidate keyframes (~1.2 ms;
@@ -154,6 +151,7 @@ class SegmentationDiscoverer:
         segmented within its own frames by the pixel BCE of its interpolations
         (:func:`with_sequence_ends` adds the end of a sequence that stops inside the window)."""
         n_cond = self.stage1.hparams.n_cond
+        clips = clips.to(self.stage1.device)
         boundary_emb = self.stage1.encoder(clips)[:, n_cond - 1 :]  # (B, N + 1, E)
         frames = clips[:, n_cond:].flatten(2)
         weights = future_pixel_weights(self.stage1.pixel_weights(clips), n_cond)

@@ -78,10 +78,10 @@ def interpolation_costs(
         c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
         predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
         positions, valid = _output_positions(a, o, max_offset, n_future)
-        logits = decoder(predicted[valid]).flatten(1)  # (V, D)
+        logits = decoder(predicted[valid]).flatten(1).float()  # (V, D), float32 whatever the networks' precision
         rows = c[:, None].expand_as(positions)[valid]
-        targets = frames[rows, positions[valid]]
-        pixel_weights = None if weights is None else weights[rows, positions[valid]]
+        targets = frames[rows, positions[valid]].to(logits)
+        pixel_weights = None if weights is None else weights[rows, positions[valid]].to(logits)
         bce = F.binary_cross_entropy_with_logits(logits, targets, pixel_weights, reduction="none").sum(1)
         costs[c, a, o - 1] = bce.new_zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
     return costs

@@ -14,6 +14,7 @@ from typing import Callable
 import torch
 from torch import Tensor
 
+from keyin.decode.names import KNEE
 from keyin.losses.soft_keyframe import IGNORE_OFFSET
 
 
@@ -30,7 +31,6 @@ def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tens
     return start[inside], offset[inside]
 
 
-KNEE = "knee"  # the label-free keyframe price: each clip's count at the knee of its cost curve
 KeyframeCost = float | str  # nats per keyframe, or KNEE
 
 

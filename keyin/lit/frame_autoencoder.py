@@ -20,7 +20,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from keyin.data.segments import valid_frames
 from keyin.eval.placement import FramePlacement, frame_placements
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.models import FrameAutoencoder
 from keyin.viz.keyframes import save_keyframe_pictures
@@ -104,10 +104,10 @@ class FrameAutoencoderModule(L.LightningModule):
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         bce, logits, frames = self.valid_reconstruction(batch)
-        metrics = {"val/bce_per_frame": bce / len(frames)}
-        if self.hparams.channels == 3:
-            metrics.update(placement_metrics(frame_placements(torch.sigmoid(logits), frames), "val/"))
-        self.log_dict(metrics, sync_dist=True)
+        self.log("val/bce_per_frame", bce / len(frames), sync_dist=True)
+        if self.hparams.channels == 3:  # which keys exist depends on the clips: not reduced over DDP's ranks
+            # (a rank would wait for a key another never logs); the logger shows rank 0's clips
+            self.log_dict(placement_metrics(frame_placements(torch.sigmoid(logits), frames), "val/"))
 
     @torch.no_grad()
     def reconstruct(self, frames: torch.Tensor) -> torch.Tensor:

@@ -71,6 +71,10 @@ class InterpolatorModule(L.LightningModule):
         if frozen_frames:
             self.freeze_frame_model()
 
+    def on_fit_start(self) -> None:
+        """Under DDP, rank r draws its segments from seed r (one process: 0, as always)."""
+        self.segment_rng.manual_seed(self.global_rank)
+
     @property
     def frozen_by_design(self) -> str | None:
         """What stays frozen in eval mode while this stage trains (said once by keyin.lit.run), or None."""
@@ -170,9 +174,10 @@ class InterpolatorModule(L.LightningModule):
         if batch_idx > 0:
             return
         table = self.offset_contrast(batch)
-        straight = torch.tensor([row["straight"] for row in table.values()]).nanmean()
-        bent = torch.tensor([row["bent"] for row in table.values()]).nanmean()
-        every = torch.tensor([row["all"] for row in table.values()]).nanmean()  # the stage's validation loss
+        # on the module's device: DDP's reduction (NCCL) refuses CPU tensors
+        straight = torch.tensor([row["straight"] for row in table.values()], device=self.device).nanmean()
+        bent = torch.tensor([row["bent"] for row in table.values()], device=self.device).nanmean()
+        every = torch.tensor([row["all"] for row in table.values()], device=self.device).nanmean()  # the stage's validation loss
         self.log_dict(
             {"val/bce_per_frame": every, "val/bce_straight": straight, "val/bce_bent": bent, "val/contrast": bent - straight},
             prog_bar=True,

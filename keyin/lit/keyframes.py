@@ -8,37 +8,29 @@ keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5
 
 from __future__ import annotations
 
-import functools
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import lightning as L
 import torch
 
-from keyin.decode.rules import (
-    BOUNDARY_SCORE_RULES,
-    KEYIN_RULES,
-    MAP_CANDIDATE_LOGIT,
-    VARIANT_RULES,
-    keyin_keyframe_probabilities,
-    keyin_keyframes,
-    map_pruned_segments,
-)
-from keyin.decode.segment_costs import video_interpolation_costs
-from keyin.decode.segmentation import KNEE, KeyframeCost
+from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES
+from keyin.decode.rules import MAP_CANDIDATE_LOGIT
+from keyin.decode.segmentation import KNEE
 from keyin.decode.teacher import teacher_loss
+from keyin.decode.trained import KeyframeRules, keyin_model
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.lit.legacy import upgrade_state_dict
-from keyin.lit.modes import evaluating
-from keyin.losses.image import future_pixel_weights, model_pixel_weights, plain_bce
+from keyin.models.modes import evaluating
+from keyin.losses.image import future_pixel_weights
 from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
-from keyin.models import KEYIN, KeyframePredictor
 from keyin.models.distributions import gaussian_kl
-from keyin.models.keyin import FROZEN_IN_STAGE2, stage1_networks
+from keyin.models.keyin import FROZEN_IN_STAGE2
 from keyin.models.positions import argmax_positions
 
 
-class KeyframeModule(L.LightningModule):
-    """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``)."""
+class KeyframeModule(KeyframeRules, L.LightningModule):
+    """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``); its discovery
+    rules are :class:`keyin.decode.trained.KeyframeRules`'."""
 
     stage = "keyframes"
     monitor = ("val/f1", "max")  # best.ckpt: keyframe F1 on the validation clips
@@ -96,20 +88,8 @@ class KeyframeModule(L.LightningModule):
                 f"got {entropy_bonus} over {entropy_bonus_steps}"
             )
         self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
-        encoder, decoder, interpolator = stage1_networks(stage1)
-        predictor = KeyframePredictor(
-            stage1["embed_dim"], n_keyframes, stage1["max_offset"], latent_dim, lstm_hidden, lstm_layers,
-            attn_scale=attn_scale, offset_mode=offset_mode, fixed_offset=fixed_offset, offset_evidence=offset_evidence,
-        )
-        self.model = KEYIN(
-            encoder, decoder, interpolator, predictor, stage1["n_cond"], delta_input=delta_input,
-            gumbel_offsets=gumbel_offsets,
-        )
+        self.model = keyin_model(self.hparams)
         self.freeze_stage1()
-
-    def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
-        """(B, L, C, H, W) weights of the image likelihood stage 1 was trained with, or None."""
-        return model_pixel_weights(clips, self.hparams.stage1)
 
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
@@ -179,67 +159,6 @@ class KeyframeModule(L.LightningModule):
             self.log_dict({f"val/{key}{name}": value for key, value in summary.items()}, prog_bar=not name, sync_dist=True)
 
     @torch.no_grad()
-    def discover(
-        self,
-        clips: torch.Tensor,
-        future_length: torch.Tensor,
-        discovery: str | None = None,
-        keyframe_cost: KeyframeCost | None = None,
-        costs: torch.Tensor | None = None,
-    ) -> list[list[int]]:
-        """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
-        "boundaries", "map", "map_pruned" or "segmentation"; default: the module's ``discovery``), inside
-        each clip; "map", "map_pruned" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
-        ``map_keyframe_cost``) and take the segments' (B, N, S) BCE from ``costs`` where given."""
-        clips = clips.to(self.device)
-        price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
-        with evaluating(self):
-            return keyin_keyframes(
-                self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
-                price, self.hparams.map_boundary_weight,
-                future_pixel_weights(self.pixel_weights(clips), self.model.n_cond), costs,
-                self.hparams.map_candidate_logit,
-            )
-
-    @torch.no_grad()
-    def map_pruned_segments(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
-        """(B, N, S) the segments ``map_pruned`` prices in each of (B, L, C, H, W) clips
-        (:func:`keyin.decode.rules.map_pruned_segments`)."""
-        with evaluating(self):
-            return map_pruned_segments(self.model, clips.to(self.device), future_length.to(self.device),
-                                       self.hparams.map_candidate_logit)
-
-    @torch.no_grad()
-    def video_costs(self, frames: torch.Tensor, keep: torch.Tensor | None = None, block: int = 256) -> torch.Tensor | None:
-        """The interpolation BCE of every segment of a whole video, which all its windows share
-        (:func:`keyin.decode.segment_costs.video_interpolation_costs`); None where the BCE weighs
-        pixels by their change within a window (``foreground_weight``), so that windows differ.
-
-        Args:
-            frames: (T, H, W, C) uint8, the video's kept frames at the model's size.
-            keep: (T - 1, S) bool, only these segments (the others ``inf``); None: all.
-        Returns:
-            (T - 1, S) on the module's device, or None.
-        """
-        if not plain_bce(self.hparams.stage1):
-            return None
-        pixels = frames.permute(0, 3, 1, 2).flatten(1)  # (T, C·H·W) uint8, as the clips' layout
-        embeddings = []
-        with evaluating(self):
-            for first in range(0, len(frames), block):
-                chunk = pixels[first : first + block].to(self.device).float().div_(255.0)
-                embeddings.append(self.model.encoder(chunk.view(1, -1, *self.model.encoder.image_shape))[0])
-            return video_interpolation_costs(self.model.interpolator, self.model.decoder, torch.cat(embeddings), pixels,
-                                             block, None if keep is None else keep.to(self.device))
-
-    @torch.no_grad()
-    def keyframe_probabilities(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
-        """(B, N) probability of a keyframe at each future frame of (B, L, C, H, W) clips
-        (:func:`keyin.decode.rules.keyin_keyframe_probabilities`)."""
-        with evaluating(self):
-            return keyin_keyframe_probabilities(self.model, clips.to(self.device), future_length.to(self.device)).cpu()
-
-    @torch.no_grad()
     def validation_pictures(self, batch: dict[str, torch.Tensor], count: int) -> dict[str, Any]:
         """What the validation pictures show for the first ``count`` clips of a batch.
 
@@ -264,26 +183,6 @@ class KeyframeModule(L.LightningModule):
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
             "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
             "max_offset": self.hparams.stage1["max_offset"],
-        }
-
-    def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
-        """The discovery rules to score, by method name: the configured one (named ``name``) first;
-        with offset evidence also the other :data:`VARIANT_RULES`, as ``<name>_<rule>``. ``rules``
-        picks among those, "map_pruned" (with offset evidence) and "segmentation" (any model: stage 1's
-        segmentation at the same price)."""
-        scored = [self.hparams.discovery]
-        if self.hparams.offset_evidence:
-            scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
-        if rules is not None:
-            extra = ("map_pruned", "segmentation") if self.hparams.offset_evidence else ("segmentation",)
-            choosable = scored + [rule for rule in extra if rule not in scored]
-            unknown = [rule for rule in rules if rule not in choosable]
-            if unknown:
-                raise ValueError(f"this model discovers by {choosable}, not {unknown}")
-            scored = [rule for rule in choosable if rule in rules]
-        return {
-            name if rule == self.hparams.discovery else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
-            for rule in scored
         }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:

@@ -1,37 +1,53 @@
-"""Which LightningModule each stage's checkpoint holds, and loading a trained one."""
+"""Which module each stage's checkpoint holds, and loading a trained one.
+
+A stage-2 checkpoint loads as a :class:`keyin.decode.trained.TrainedKeyframes`, built with torch
+alone: keyin-eval and keyin-discover on a KEYIN, Jumpy or Static model never import Lightning
+(a second or more of every command's start). The other stages load as their LightningModule.
+"""
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 from typing import Any
 
-import lightning as L
+import torch
+from torch import nn
 
-from keyin.lit.checkpoints import CONFIG_KEY, STAGE_KEY, load_checkpoint, saved_model_name
-from keyin.lit.frame_autoencoder import FrameAutoencoderModule
-from keyin.lit.interpolator import InterpolatorModule
-from keyin.lit.keyframes import KeyframeModule
-from keyin.lit.surprise import SurpriseModule
-from keyin.lit.tap import TAPModule
+from keyin.checkpoints import CONFIG_KEY, STAGE_KEY, load_checkpoint, saved_model_name
 
-STAGES: dict[str, type[L.LightningModule]] = {
-    "interpolator": InterpolatorModule, "keyframes": KeyframeModule, "surprise": SurpriseModule, "tap": TAPModule,
-    "frames": FrameAutoencoderModule,
+# stage -> "module:class" of the LightningModule that trains it (imported only when loaded)
+STAGES: dict[str, str] = {
+    "interpolator": "keyin.lit.interpolator:InterpolatorModule", "keyframes": "keyin.lit.keyframes:KeyframeModule",
+    "surprise": "keyin.lit.surprise:SurpriseModule", "tap": "keyin.lit.tap:TAPModule",
+    "frames": "keyin.lit.frame_autoencoder:FrameAutoencoderModule",
 }
 
 
-def load_trained_module(path: str | Path, stage: str | None = "keyframes") -> tuple[L.LightningModule, dict[str, Any]]:
-    """A trained module (in eval mode) and the run config stored with it, its ``model.name`` in this
-    version's names (:func:`keyin.lit.checkpoints.saved_model_name`).
+def stage_class(stage: str) -> type[nn.Module]:
+    """The class a checkpoint of ``stage`` loads as: a stage 2 without Lightning, else its LightningModule."""
+    if stage == "keyframes":
+        from keyin.decode.trained import TrainedKeyframes
+
+        return TrainedKeyframes
+    module, name = STAGES[stage].split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def load_trained_module(
+    path: str | Path, stage: str | None = "keyframes", device: torch.device | str = "cpu"
+) -> tuple[nn.Module, dict[str, Any]]:
+    """A trained module (in eval mode, on ``device``) and the run config stored with it, its
+    ``model.name`` in this version's names (:func:`keyin.checkpoints.saved_model_name`).
 
     Args:
         path: a checkpoint file or ``pretrained:<name>``.
         stage: one of :data:`STAGES`, or None for whichever the checkpoint holds.
     """
     checkpoint = load_checkpoint(path, stage)
-    module = STAGES[checkpoint[STAGE_KEY]](**checkpoint["hyper_parameters"])
+    module = stage_class(checkpoint[STAGE_KEY])(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
     config = dict(checkpoint[CONFIG_KEY])
     if "model" in config:
         config["model"] = dict(config["model"], name=saved_model_name(checkpoint))
-    return module.eval(), config
+    return module.to(device).eval(), config

@@ -17,6 +17,7 @@ from keyin.io import remove_stale_temporaries
 from keyin.lit.checkpoints import BEST, AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
 from keyin.lit.progress import StepProgressBar
+from keyin.lit.ranks import RankSeeds
 
 
 log = logging.getLogger(__name__)
@@ -128,7 +129,8 @@ def fit_stage(
         check_val_every_n_epoch=None,
         logger=logger,
         callbacks=[*stage_checkpoints(folder, module, checkpoint_every), RunConfigInCheckpoint(config), FiniteLoss(),
-                   ValidationPictures(Path(run_dir) / "pictures"), FinalCheckpoint(last), *progress],
+                   ValidationPictures(Path(run_dir) / "pictures"), FinalCheckpoint(last), RankSeeds(config.get("seed", 0)),
+                   *progress],
         default_root_dir=str(run_dir),
         plugins=[AtomicCheckpointIO()],
     )

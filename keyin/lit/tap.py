@@ -18,7 +18,7 @@ import torch
 from torch.utils.data import Dataset
 
 from keyin.eval.tap import save_subgoal_grid, score_whole_clips
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.tap import argmin_times, pair_autoencoding_bce, pair_bce, sample_pairs, shortest_gap, whole_clip_pairs
 from keyin.models import TAPNetwork

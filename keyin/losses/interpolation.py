@@ -38,7 +38,9 @@ def segment_bce(
     rows = clip.to(device)[:, None]
     targets = clips[rows, frames][valid]  # (V, C, H, W)
     weights = None if weights is None else weights[rows, frames][valid]
-    bce = F.binary_cross_entropy_with_logits(decoder(predicted[valid]), targets, weights, reduction="none")
+    logits = decoder(predicted[valid]).float()  # float32 sums, whatever the precision of the networks
+    bce = F.binary_cross_entropy_with_logits(logits, targets.to(logits), None if weights is None else weights.to(logits),
+                                             reduction="none")
     per_segment = torch.zeros(valid.shape[0], device=device).index_put_(
         (valid.nonzero()[:, 0],), bce.flatten(1).sum(1), accumulate=True
     )
@@ -63,7 +65,9 @@ def autoencoding_bce(
         pick = torch.randperm(n_frames, generator=generator)[:subset].to(frames.device)
         frames, embeddings = frames[pick], embeddings[pick]
         weights = None if weights is None else weights[pick]
-    bce = F.binary_cross_entropy_with_logits(decoder(embeddings), frames, weights, reduction="sum")
+    logits = decoder(embeddings).float()
+    bce = F.binary_cross_entropy_with_logits(logits, frames.to(logits), None if weights is None else weights.to(logits),
+                                             reduction="sum")
     return bce * n_frames / frames.shape[0]
 
 

@@ -11,6 +11,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from keyin.precision import in_float32
 from keyin.models.distributions import gaussian_kl
 from keyin.models.positions import PROB_EPS, future_window, position_distributions, soft_frames, valid_frame_mask
 
@@ -256,8 +257,9 @@ def boundary_teacher_loss(boundary_scores: Tensor, boundaries: Tensor, lengths: 
     return F.binary_cross_entropy_with_logits(boundary_scores[valid], boundaries.to(boundary_scores)[valid])
 
 
+@in_float32  # a clamp at 1e-12 is 0 in half precision, and 0 · log 0 is NaN
 def offset_entropy(offset_probs: Tensor) -> Tensor:
-    """(B, M) entropy in nats of each offset distribution δ (B, M, S)."""
+    """(B, M) entropy in nats of each offset distribution δ (B, M, S), in float32."""
     return -(offset_probs * offset_probs.clamp_min(1e-12).log()).sum(-1)
 
 

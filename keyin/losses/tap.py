@@ -133,7 +133,8 @@ def frame_bce(logits: Tensor, frames: Tensor, weights: Tensor | None = None) -> 
 def entropy_floor(frames: Tensor) -> Tensor:
     """(B, L) the least BCE a prediction can reach on each frame: Σ H(y) over its pixels (0 for
     binary frames), from (B, L, C, H, W) frames in [0, 1]."""
-    return F.binary_cross_entropy(frames, frames, reduction="none").flatten(2).sum(-1)
+    # Σ -[y log y + (1 - y) log(1 - y)]; not F.binary_cross_entropy, which CUDA autocast refuses
+    return -(torch.special.xlogy(frames, frames) + torch.special.xlogy(1 - frames, 1 - frames)).flatten(2).sum(-1)
 
 
 def min_over_time_bce(

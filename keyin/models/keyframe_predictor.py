@@ -11,6 +11,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
+from keyin.precision import in_float32
 from keyin.models.attention import attention_posterior
 from keyin.models.offset_heads import offset_head
 from keyin.models.positions import initial_position, shifted_positions
@@ -164,6 +165,7 @@ class KeyframePredictor(nn.Module):
         scores = self.boundary_head(features).squeeze(-1) if self.boundary_head is not None else None
         return keys, values, mask, scores
 
+    @in_float32  # a cumulative sum of log-probabilities: float32 under mixed precision
     def _extended_scores(self, scores: Tensor, mask: Tensor, length: int) -> tuple[Tensor, Tensor]:
         """Boundary logits on the extended index (index k = future position k - 1; K^0 and every
         position past the clip score ``beyond_score``), (B, length), and their
@@ -173,6 +175,7 @@ class KeyframePredictor(nn.Module):
         extended[:, 1 : frame_scores.shape[1] + 1] = frame_scores
         return extended, F.logsigmoid(-extended).cumsum(-1)
 
+    @in_float32
     def _add_boundary_evidence(self, offset_logits: Tensor, scores: Tensor, mask: Tensor, chain: Chain = "soft") -> Tensor:
         """Offset logits plus the log-probability that offset a + 1 reaches the *first* boundary.
 
@@ -212,6 +215,7 @@ class KeyframePredictor(nn.Module):
             logits.append(logit)
         return torch.stack(logits, dim=1)
 
+    @in_float32
     def offset_log_probs(self, head_logits: Tensor, scores: Tensor, mask: Tensor) -> Tensor:
         """log δ^t for every place of the previous keyframe: what :meth:`_add_boundary_evidence`
         gives along one path, for all paths at once.

@@ -171,7 +171,8 @@ class KEYIN(nn.Module):
         n_clips, n_keys, max_offset = offsets.shape
         latent = torch.randn(n_clips * n_keys, self.interpolator.latent_dim, device=key_emb.device)
         inter_emb = self.interpolator(starts.flatten(0, 1), key_emb.flatten(0, 1), offsets.flatten(0, 1), latent)
-        frames = torch.sigmoid(self.decoder(inter_emb.flatten(0, 1)))  # (B·M·S, C, H, W)
+        # float32: these probabilities meet the loss's logs (a half-precision sigmoid rounds to 1 near 1)
+        frames = torch.sigmoid(self.decoder(inter_emb.flatten(0, 1)).float())  # (B·M·S, C, H, W)
         return frames.reshape(n_clips, n_keys, max_offset, -1)
 
     def argmax_video(self, clips: Tensor, out: dict[str, Tensor | None]) -> Tensor:

@@ -28,7 +28,6 @@ from keyin.data.windows import cut_window, original_frame, original_time
 from keyin.decode.merge import WindowKeyframes, merge_windows
 from keyin.decode.segment_costs import window_costs
 from keyin.io import atomic_write_text, remove_stale_temporaries, replace_folder, temporary_path
-from keyin.viz.discovered import save_annotated_gif, save_contact_sheet, save_timeline
 
 Discoverer = Callable[..., list[list[int]]]  # (B, L, C, H, W), (B,)[, costs=(B, N, S)] -> per clip, future positions
 VideoCosts = Callable[[Tensor, Tensor | None], Tensor | None]  # (T, H, W, C) uint8, (T - 1, S) kept -> (T - 1, S) costs, or None
@@ -192,6 +191,8 @@ def write_video_folder(
 def save_pictures(folder: Path, video: ImportedVideo, keyframes: Sequence[Keyframe], n_cond: int, frame_stride: int) -> None:
     """One video's contact sheet, timeline and annotated GIF into ``folder`` (at a cheap rule, most of
     keyin-discover's time: benchmarks/results/discover_speed.md)."""
+    from keyin.viz.discovered import save_annotated_gif, save_contact_sheet, save_timeline  # matplotlib: only for pictures
+
     kept = [keyframe.frame // frame_stride for keyframe in keyframes]
     save_contact_sheet(folder / "contact_sheet.png", video.frames[kept], [caption(k) for k in keyframes], video.id)
     save_timeline(

@@ -85,13 +85,14 @@ class PriorKeyframes:
 
     def __init__(self, model: KEYIN, start: np.ndarray) -> None:
         self.model = model
-        frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond)
+        self.device = next(model.parameters()).device
+        frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond, self.device)
         with torch.no_grad():
             self.cond_emb = model.encoder(frames)  # (1, n_cond, E)
 
     @torch.no_grad()
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
-        latents = torch.as_tensor(z, dtype=torch.float32)  # (n, L, Zk)
+        latents = torch.as_tensor(z, dtype=torch.float32, device=self.device)  # (n, L, Zk)
         images = self.model.keyframe_images(self.cond_emb.expand(len(latents), -1, -1), latents, last_only)
         return tensor_to_images(images)  # (n, K, H, W, C)
 

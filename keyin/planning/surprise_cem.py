@@ -38,18 +38,19 @@ class SurpriseRollouts:
 
     def __init__(self, model: SVG, start: np.ndarray, n_keyframes: int, shift: int) -> None:
         self.model, self.n_keyframes, self.shift = model, n_keyframes, shift
-        self.cond_frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond)
+        self.device = next(model.parameters()).device
+        self.cond_frames = conditioning_frames(start, model.encoder.image_shape, model.n_cond, self.device)
         with torch.no_grad():
             self.cond_emb, self.context = model.encode(self.cond_frames)  # (1, n_cond, E), skips of the start
 
     @torch.no_grad()
     def __call__(self, z: np.ndarray, last_only: bool) -> np.ndarray:
-        embeddings = self.model.rollout(self.cond_emb, torch.as_tensor(z, dtype=torch.float32))  # (n, T, E)
+        embeddings = self.model.rollout(self.cond_emb, torch.as_tensor(z, dtype=torch.float32, device=self.device))  # (n, T, E)
         if last_only:
             return tensor_to_images(torch.sigmoid(self.model.decode(embeddings[:, -1:], self.context)))  # (n, 1, H, W, C)
         frames = torch.sigmoid(self.model.decode(embeddings, self.context))  # (n, T, C, H, W)
         clips = torch.cat([self.cond_frames.expand(len(frames), -1, -1, -1, -1), frames], 1)
-        kl = self.model.surprise(clips)  # (n, n_cond + T): the inference network on the produced sequence
+        kl = self.model.surprise(clips).cpu()  # (n, n_cond + T): the inference network on the produced sequence
         lengths = torch.full((len(frames),), frames.shape[1])
         positions = surprise_keyframes(kl, lengths, self.model.n_cond, self.n_keyframes, self.shift)
         return np.stack([tensor_to_images(frames[row, picked]) for row, picked in enumerate(positions)])

@@ -49,12 +49,12 @@ class TAPSubgoals(TrainedPlanner):
     def __call__(
         self, start: np.ndarray, goal: np.ndarray, task: PlanningTask, rng: np.random.Generator
     ) -> Subgoals:
-        network = self.module().network  # in eval mode on the CPU
-        shape = network.encoder.image_shape
+        network = self.module().network  # in eval mode on the planner's device
+        shape, device = network.encoder.image_shape, next(network.parameters()).device
         subgoals = bisect_subgoals(
             lambda first, last: torch.sigmoid(network(first[None], last[None]))[0],  # (C, H, W) in [0, 1]
-            images_to_tensor(start, shape),
-            images_to_tensor(goal, shape),
+            images_to_tensor(start, shape).to(device),
+            images_to_tensor(goal, shape).to(device),
             self.depth,
         )
         return Subgoals(tensor_to_images(torch.stack(subgoals)), {})

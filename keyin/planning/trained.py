@@ -5,8 +5,8 @@ loaded once per process, and images converted between the tasks' uint8 and the m
 or wrong one stops the run with one error line before any task. The runner pickles the planner into
 every task it hands a spawn worker; the planner holds only the checkpoint's path and its numbers,
 and :func:`trained_module` loads the model at a process's first task and keeps it for the process's
-life (a cache keyed by its arguments), on the CPU, with ``torch_threads`` intra-op threads (1: the
-workers already use every core).
+life (a cache keyed by its arguments), on ``device`` (``auto``: the GPU where there is one), with
+``torch_threads`` intra-op threads (1: the workers already use every core).
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ import functools
 from dataclasses import dataclass
 from typing import ClassVar
 
-import lightning as L
 import numpy as np
 import torch
 
+from keyin.devices import choose_device
 from keyin.errors import CheckpointError, DatasetFormatError
 from keyin.lit.registry import load_trained_module
 from keyin.pretrained import resolve
@@ -26,9 +26,9 @@ from keyin.pretrained import resolve
 
 @functools.cache
 def trained_module(
-    checkpoint: str, stage: str, model: str, dataset: str, train_command: str, threads: int
-) -> L.LightningModule:
-    """The module of ``checkpoint``, in eval mode on the CPU; loaded once per process.
+    checkpoint: str, stage: str, model: str, dataset: str, train_command: str, threads: int, device: str = "cpu"
+) -> torch.nn.Module:
+    """The module of ``checkpoint``, in eval mode on ``device`` (``device=``'s choices); loaded once per process.
 
     Args:
         stage: the training stage it must hold ("keyframes", "tap").
@@ -36,6 +36,7 @@ def trained_module(
         train_command: the keyin-train command that makes it, for the error messages.
         threads: torch's intra-op threads in this process.
     Raises:
+        ConfigError: a device this machine does not have.
         CheckpointError: a missing or unloadable file, another stage, model or dataset.
     """
     fix = (
@@ -53,7 +54,7 @@ def trained_module(
     if saved != {"model": model, "dataset": dataset}:
         raise CheckpointError(f"{path} holds a model={saved['model']} dataset={saved['dataset']} checkpoint; {fix}")
     torch.set_num_threads(threads)
-    return module.cpu().eval()
+    return module.to(choose_device(device)).eval()
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,7 @@ class TrainedPlanner:
         model, dataset: the ``model=`` and ``dataset=`` it must have been trained with.
         train_command: the keyin-train command that makes it (named when it is missing or wrong).
         torch_threads: torch's intra-op threads in each planning process.
+        device: where the model plans (``device=auto|cpu|cuda|cuda:N``).
     """
 
     stage: ClassVar[str]  # the training stage the checkpoint holds
@@ -74,14 +76,15 @@ class TrainedPlanner:
     dataset: str
     train_command: str
     torch_threads: int = 1
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
         self.module()  # a missing or wrong checkpoint stops keyin-plan before its first task
 
-    def module(self) -> L.LightningModule:
+    def module(self) -> torch.nn.Module:
         """The trained module, loaded at this process's first call."""
         return trained_module(
-            self.checkpoint, self.stage, self.model, self.dataset, self.train_command, self.torch_threads
+            self.checkpoint, self.stage, self.model, self.dataset, self.train_command, self.torch_threads, self.device
         )
 
 
@@ -107,8 +110,10 @@ def tensor_to_images(probs: torch.Tensor) -> np.ndarray:
     return (probs.clamp(0, 1) * 255).round().to(torch.uint8).movedim(-3, -1).cpu().numpy()
 
 
-def conditioning_frames(start: np.ndarray, shape: tuple[int, int, int], n_cond: int) -> torch.Tensor:
-    """(1, n_cond, C, H, W): the (H, W, C) uint8 start image as every conditioning frame of a model
-    whose frames are ``shape`` = (C, H, W) (pushing has one conditioning frame)."""
-    frames = images_to_tensor(start, shape)
+def conditioning_frames(
+    start: np.ndarray, shape: tuple[int, int, int], n_cond: int, device: torch.device | str = "cpu"
+) -> torch.Tensor:
+    """(1, n_cond, C, H, W) on ``device``: the (H, W, C) uint8 start image as every conditioning frame
+    of a model whose frames are ``shape`` = (C, H, W) (pushing has one conditioning frame)."""
+    frames = images_to_tensor(start, shape).to(device)
     return frames.expand(1, n_cond, *frames.shape)

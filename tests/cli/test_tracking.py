@@ -10,7 +10,7 @@ import json
 import pytest
 
 from keyin.cli.naming import job_dir, job_label, safe_name, sweep_group
-from keyin.cli.tracking import wandb_logged_in
+from keyin.cli.naming import wandb_logged_in
 from tests.cli.runner import run, run_process
 
 wandb = pytest.importorskip("wandb")

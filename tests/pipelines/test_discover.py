@@ -12,8 +12,8 @@ import torch
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.data.sources import decoded_frames
 from keyin.data.windows import kept_keyframes
-from keyin.pipelines import discover
 from keyin.pipelines.discover import FILES, discover_video, discover_videos, folder_names, window_batches
+from keyin.viz import discovered
 from tests.videos import EVENTS, FPS, LEVEL0, LEVEL_STEP, frame_numbers, frames, write_video
 
 N_COND, N_FUTURE = 2, 10
@@ -96,7 +96,7 @@ def test_a_crash_while_writing_leaves_no_folder_and_no_temporary(video_file, tmp
     def fail(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(discover, "save_timeline", fail)
+    monkeypatch.setattr(discovered, "save_timeline", fail)  # imported by discover when it draws
     with pytest.raises(OSError):
         discover_videos(videos, *oracle(set()), tmp_path, {}, N_COND, N_FUTURE, 1, 5, progress=False)
     assert list(tmp_path.iterdir()) == []

@@ -1,4 +1,4 @@
-"""Running a LightningModule in eval mode for a moment (discovery, pictures) inside training."""
+"""Running a module in eval mode for a moment (discovery, pictures) inside training."""
 
 from __future__ import annotations
 

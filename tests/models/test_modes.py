@@ -3,7 +3,7 @@
 import pytest
 import torch
 
-from keyin.lit.modes import evaluating
+from keyin.models.modes import evaluating
 from tests.planning.trained_models import keyframe_module
 
 

@@ -1,0 +1,174 @@
+"""A trained stage 2 (KEYIN, Jumpy, Static) and its discovery rules, without Lightning.
+
+:class:`KeyframeRules` holds what finding keyframes asks of a stage-2 model; the LightningModule
+that trains it (:class:`keyin.lit.keyframes.KeyframeModule`) and :class:`TrainedKeyframes`, which
+keyin-eval, keyin-discover, keyin-figures and keyin-plan build from a checkpoint with torch alone,
+share it, so both find the same keyframes.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable, Mapping, Sequence
+
+import torch
+from torch import nn
+
+from keyin.decode.names import BOUNDARY_SCORE_RULES, VARIANT_RULES
+from keyin.decode.rules import MAP_CANDIDATE_LOGIT, keyin_keyframe_probabilities, keyin_keyframes, map_pruned_segments
+from keyin.decode.segment_costs import video_interpolation_costs
+from keyin.decode.segmentation import KeyframeCost
+from keyin.models.modes import evaluating
+from keyin.losses.image import future_pixel_weights, model_pixel_weights, plain_bce
+from keyin.models import KEYIN, KeyframePredictor
+from keyin.models.keyin import stage1_networks
+
+# The defaults of KeyframeModule's arguments that building and running a trained model reads, for
+# checkpoints saved before the argument existed (tests/decode/test_trained.py keeps them equal).
+INFERENCE_DEFAULTS: dict[str, Any] = {
+    "offset_evidence": False, "discovery": "offsets", "map_keyframe_cost": 120.0, "map_boundary_weight": 10.0,
+    "map_candidate_logit": MAP_CANDIDATE_LOGIT, "delta_input": "soft", "gumbel_offsets": False,
+}
+
+
+def keyin_model(hparams: Mapping[str, Any]) -> KEYIN:
+    """The KEYIN model (stage 1's networks and the keyframe predictor) sized by a stage-2 module's
+    hyper-parameters; its weights come from a checkpoint."""
+    stage1 = hparams["stage1"]
+    encoder, decoder, interpolator = stage1_networks(stage1)
+    predictor = KeyframePredictor(
+        stage1["embed_dim"], hparams["n_keyframes"], stage1["max_offset"], hparams["latent_dim"], hparams["lstm_hidden"],
+        hparams["lstm_layers"], attn_scale=hparams["attn_scale"], offset_mode=hparams["offset_mode"],
+        fixed_offset=hparams["fixed_offset"], offset_evidence=hparams["offset_evidence"],
+    )
+    return KEYIN(encoder, decoder, interpolator, predictor, stage1["n_cond"], delta_input=hparams["delta_input"],
+                 gumbel_offsets=hparams["gumbel_offsets"])
+
+
+class Hyperparameters(dict):
+    """A dict whose keys read and write as attributes too (``hparams.discovery``), as Lightning's."""
+
+    def __getattr__(self, key: str) -> Any:
+        try:
+            return self[key]
+        except KeyError:
+            raise AttributeError(key) from None
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        self[key] = value
+
+
+class KeyframeRules:
+    """The discovery rules of a stage-2 model; the class that mixes it in has ``model`` (a
+    :class:`keyin.models.KEYIN`), ``hparams`` and ``device``."""
+
+    model: KEYIN
+    hparams: Any
+    device: torch.device
+
+    def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
+        """(B, L, C, H, W) weights of the image likelihood stage 1 was trained with, or None."""
+        return model_pixel_weights(clips, self.hparams.stage1)
+
+    @torch.no_grad()
+    def discover(
+        self,
+        clips: torch.Tensor,
+        future_length: torch.Tensor,
+        discovery: str | None = None,
+        keyframe_cost: KeyframeCost | None = None,
+        costs: torch.Tensor | None = None,
+    ) -> list[list[int]]:
+        """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
+        "boundaries", "map", "map_pruned" or "segmentation"; default: the module's ``discovery``), inside
+        each clip; "map", "map_pruned" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
+        ``map_keyframe_cost``) and take the segments' (B, N, S) BCE from ``costs`` where given."""
+        clips = clips.to(self.device)
+        price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
+        with evaluating(self):
+            return keyin_keyframes(
+                self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
+                price, self.hparams.map_boundary_weight,
+                future_pixel_weights(self.pixel_weights(clips), self.model.n_cond), costs,
+                self.hparams.map_candidate_logit,
+            )
+
+    @torch.no_grad()
+    def map_pruned_segments(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
+        """(B, N, S) the segments ``map_pruned`` prices in each of (B, L, C, H, W) clips
+        (:func:`keyin.decode.rules.map_pruned_segments`)."""
+        with evaluating(self):
+            return map_pruned_segments(self.model, clips.to(self.device), future_length.to(self.device),
+                                       self.hparams.map_candidate_logit)
+
+    @torch.no_grad()
+    def video_costs(self, frames: torch.Tensor, keep: torch.Tensor | None = None, block: int = 256) -> torch.Tensor | None:
+        """The interpolation BCE of every segment of a whole video, which all its windows share
+        (:func:`keyin.decode.segment_costs.video_interpolation_costs`); None where the BCE weighs
+        pixels by their change within a window (``foreground_weight``), so that windows differ.
+
+        Args:
+            frames: (T, H, W, C) uint8, the video's kept frames at the model's size.
+            keep: (T - 1, S) bool, only these segments (the others ``inf``); None: all.
+        Returns:
+            (T - 1, S) on the module's device, or None.
+        """
+        if not plain_bce(self.hparams.stage1):
+            return None
+        pixels = frames.permute(0, 3, 1, 2).flatten(1)  # (T, C·H·W) uint8, as the clips' layout; moved a block at a time
+        embeddings = []
+        with evaluating(self):
+            for first in range(0, len(frames), block):
+                chunk = pixels[first : first + block].to(self.device).float().div_(255.0)
+                embeddings.append(self.model.encoder(chunk.view(1, -1, *self.model.encoder.image_shape))[0])
+            return video_interpolation_costs(self.model.interpolator, self.model.decoder, torch.cat(embeddings), pixels,
+                                             block, None if keep is None else keep.to(self.device))
+
+    @torch.no_grad()
+    def keyframe_probabilities(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
+        """(B, N) probability of a keyframe at each future frame of (B, L, C, H, W) clips
+        (:func:`keyin.decode.rules.keyin_keyframe_probabilities`), on the CPU."""
+        with evaluating(self):
+            return keyin_keyframe_probabilities(self.model, clips.to(self.device), future_length.to(self.device)).cpu()
+
+    def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
+        """The discovery rules to score, by method name: the configured one (named ``name``) first;
+        with offset evidence also the other :data:`VARIANT_RULES`, as ``<name>_<rule>``. ``rules``
+        picks among those, "map_pruned" (with offset evidence) and "segmentation" (any model: stage 1's
+        segmentation at the same price)."""
+        scored = [self.hparams.discovery]
+        if self.hparams.offset_evidence:
+            scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
+        if rules is not None:
+            extra = ("map_pruned", "segmentation") if self.hparams.offset_evidence else ("segmentation",)
+            choosable = scored + [rule for rule in extra if rule not in scored]
+            unknown = [rule for rule in rules if rule not in choosable]
+            if unknown:
+                raise ValueError(f"this model discovers by {choosable}, not {unknown}")
+            scored = [rule for rule in choosable if rule in rules]
+        return {
+            name if rule == self.hparams.discovery else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
+            for rule in scored
+        }
+
+
+class TrainedKeyframes(KeyframeRules, nn.Module):
+    """A trained stage 2 built from its checkpoint's hyper-parameters (``keyin_stage`` "keyframes"),
+    for inference only; its state dict's names are :class:`keyin.lit.keyframes.KeyframeModule`'s.
+
+    Args:
+        hparams: the checkpoint's ``hyper_parameters``; :data:`INFERENCE_DEFAULTS` fill those it lacks.
+    """
+
+    stage = "keyframes"
+
+    def __init__(self, **hparams: Any) -> None:
+        super().__init__()
+        if hparams.get("discovery", "offsets") in BOUNDARY_SCORE_RULES and not hparams.get("offset_evidence"):
+            raise ValueError(f"discovery={hparams['discovery']!r} needs offset_evidence (the boundary scores)")
+        object.__setattr__(self, "hparams", Hyperparameters({**INFERENCE_DEFAULTS, **hparams}))
+        self.model = keyin_model(self.hparams)
+
+    @property
+    def device(self) -> torch.device:
+        return next(self.parameters()).device
