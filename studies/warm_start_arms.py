@@ -28,7 +28,7 @@ from pathlib import Path
 import torch
 from torch.utils.data import DataLoader
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # common.py stays with the benchmarks
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
 
 from keyin.data.datamodule import split_clips  # noqa: E402
