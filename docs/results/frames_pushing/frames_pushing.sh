@@ -15,6 +15,6 @@ for width in 8 16; do
   $PY benchmarks/encode_split.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val \
     > benchmarks/results/encode_split_frames_w$width.md
 done
-$PY studies/stage1_objects.py docs/results/pushing_table2/models/keyin_plus_seed1.ckpt --split val --clips 200 \
+$PY studies/stage1_objects.py models/pushing_table2/keyin_plus_seed1.ckpt --split val --clips 200 \
   > studies/results/stage1_objects_keyin_plus_seed1.md
 date

@@ -14,5 +14,5 @@ while pgrep -f "dataset=pushing_irregular workers=1" >/dev/null; do sleep 10; do
 /usr/bin/time -f "gate %e s" $PY -m keyin.cli.eval ckpt=$RUN/checkpoints/interpolator/last.ckpt dataset=pushing split=val clips=200 \
   progress=false hydra.run.dir=runs/frames_stage1/gate_pushing
 $PY studies/stage1_objects.py $RUN/checkpoints/interpolator/last.ckpt --split val --clips 200 > runs/frames_stage1/objects_pushing.md
-/usr/bin/time -f "gate joint %e s" $PY -m keyin.cli.eval ckpt=/work/main/docs/results/pushing_table2/models/keyin_plus_seed1.ckpt \
+/usr/bin/time -f "gate joint %e s" $PY -m keyin.cli.eval ckpt=/work/main/models/pushing_table2/keyin_plus_seed1.ckpt \
   dataset=pushing split=val clips=200 'discovery=[segmentation]' progress=false hydra.run.dir=runs/frames_stage1/gate_joint_pushing
