@@ -2,7 +2,7 @@
 
     python studies/pushing_turns.py --split data/pushing/test-00000.h5
 
-A pushing keyframe is the last saved frame of a push (REFERENCE §5.1). Discovery by interpolation
+A pushing keyframe is the last saved frame of a push (paper App. 7: "frames at which subgoals are finished"). Discovery by interpolation
 finds frames where the motion changes; this measures, from the true puck positions, where the
 puck's motion changes most around each labelled keyframe c, and the exact F1 of an oracle that
 reads the true trajectory and marks its sharpest turns (as many as the clip has labels). Prints
