@@ -1,4 +1,4 @@
-"""Brownian test-set statistics and generation speed (issue "Foundation"; REFERENCE §6.1).
+"""Brownian test-set statistics and generation speed (issue "Foundation"; paper §4.1.1).
 
     python benchmarks/brownian_stats.py --clips 1000
 

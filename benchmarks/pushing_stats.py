@@ -8,7 +8,7 @@ Prints a Markdown table with a column per dataset (``--dataset``: conf/dataset/<
 generator), from the demos of the ``--split``'s first clips (physics only, the same labels as the
 generated clips): acceptance rate, the histograms of push lengths, of pauses and of the gaps between
 labels, keyframes per clip, detour sides, demo lengths and the fraction of padded clips, the
-Random / Constant-c keyframe F1 (REFERENCE §6.2's sanity rows; exact over all labels and the
+Random / Constant-c keyframe F1 (the paper's Table 1 rows; exact over all labels and the
 interior column of docs/evaluation.md), and the initial shortest-path distance over ``--tasks``
 planning tasks (the paper's "Initial" row, 1.32 ± 0.06). Draws a grid of the first dataset's
 sample demos with subgoals and keyframes marked.

@@ -1,4 +1,4 @@
-"""Benchmark: vectorised soft keyframe loss vs. a per-element Python loop (REFERENCE §3).
+"""Benchmark: vectorised soft keyframe loss vs. a per-element Python loop (paper Alg. 2).
 
 Run from the repository root:
 

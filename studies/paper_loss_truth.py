@@ -36,7 +36,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # common.py stays with the benchmarks
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
 from stage2_diagnostics import frame_embeddings_at, true_offsets  # noqa: E402
 

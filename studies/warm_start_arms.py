@@ -31,7 +31,7 @@ from pathlib import Path
 import torch
 from torch.utils.data import DataLoader
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # common.py stays with the benchmarks
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
 from paper_loss_truth import Clips, Reading, interpolation_term  # noqa: E402

@@ -33,7 +33,7 @@ def optional_name(value: Any) -> str | None:
 
 
 def check_dataset(dataset: Mapping[str, Any]) -> None:
-    """Sizes positive, image size a power of two, and S <= N <= M·S (REFERENCE §1, §3.8)."""
+    """Sizes positive, image size a power of two, and S <= N <= M·S (paper §3.1; docs/architecture.md, "Index conventions")."""
     for key in DATASET_SIZES:
         require_positive_int(dataset.get(key), f"dataset.{key}")
     size = dataset["image_size"]

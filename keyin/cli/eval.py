@@ -1,5 +1,5 @@
 """keyin-eval model=random|constant dataset=<name> (or ckpt=<path>): keyframe F1 (paper Table 1);
-with video_samples=k also video-prediction PSNR/SSIM of a stage-2 checkpoint (REFERENCE §5.4) and
+with video_samples=k also video-prediction PSNR/SSIM of a stage-2 checkpoint (docs/evaluation.md) and
 pictures of its rollouts and of k prior samples of the first video_clips clips (the paper's Fig. 5, 10)."""
 
 from __future__ import annotations

@@ -119,7 +119,7 @@ def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> lis
         f"# Planning on the pushing tasks (paper Table 2)\n\nFrom {described(sweep)} by `keyin-report "
         f"{' '.join(map(str, sweep))}` on "
         f"{date.today()}; final shortest-path distance to the goal around the wall (world units), mean ± std "
-        f"over tasks; success = final error ≤ {threshold:g}. The paper states no threshold (REFERENCE §5.2): "
+        f"over tasks; success = final error ≤ {threshold:g}. The paper states no threshold (docs/planning.md, 'Success threshold'): "
         f"compare the curve in table2_success.png.\n\n"
     )
     outcomes = outcome_markdown(rows)

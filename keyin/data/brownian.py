@@ -1,4 +1,4 @@
-"""Structured Brownian motion (REFERENCE §6.1): a ball moving straight, turning at random vertices.
+"""Structured Brownian motion (paper §4 "Datasets", §4.1.1): a ball moving straight, turning at random vertices.
 
 A clip is ``n_cond + n_future`` binary 32x32 frames of one disc. The ball moves at constant speed
 along straight segments of ``U{segment_min..segment_max}`` frames; at each vertex it turns by at

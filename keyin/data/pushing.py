@@ -1,4 +1,4 @@
-"""Pushing demonstrations as dataset clips (REFERENCE §6.2) and the fixed planning tasks (§5.2).
+"""Pushing demonstrations as dataset clips (paper §4.1.2, App. 7) and the fixed planning tasks (docs/planning.md).
 
 ``PushingGenerator.generate(index, seed)`` runs the rule-based demonstrator of
 :mod:`keyin.envs.demonstrator` without rendering, retrying with derived sub-seeds until a demo is
@@ -25,7 +25,7 @@ from keyin.data.hdf5 import write_shard
 N_SUBGOAL_SLOTS = 6  # the ``subgoals`` array is (6, 2) whatever n_pushes is (unused rows repeat the goal)
 _ENVS: dict = {}  # one pixel-free environment per generator config and process
 RENDERERS = ("analytic", "mujoco")
-PLANNING_SPLIT = "planning"  # the fixed planning tasks (REFERENCE §5.2), a split of their own
+PLANNING_SPLIT = "planning"  # the fixed planning tasks (docs/planning.md), a split of their own
 
 
 @dataclass(frozen=True)
@@ -229,7 +229,7 @@ class PushingGenerator:
         return arrays, attempts
 
     def planning_task(self, index: int, seed: int) -> dict[str, np.ndarray]:
-        """A planning task from an accepted demo (REFERENCE §5.2): start in the demo's start state,
+        """A planning task from an accepted demo (docs/planning.md): start in the demo's start state,
         reach the demo's final puck position.
 
         Returns:

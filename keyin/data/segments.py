@@ -1,4 +1,4 @@
-"""Segments for training and diagnosing the interpolator (stage 1, REFERENCE §2.5, §2.7a).
+"""Segments for training and diagnosing the interpolator (stage 1, paper §3.2 "Training procedure", §4).
 
 A segment of a clip is a start frame ``a`` and an offset ``o``: the interpolator sees frames ``a``
 and ``a + o`` and must produce frames ``a + 1 … a + o`` (output ``i`` sits at ``a + 1 + i``; the

@@ -1,4 +1,4 @@
-"""Keyframe baselines that need no training (REFERENCE §4): Random and Constant.
+"""Keyframe baselines that need no training (paper Table 1; docs/architecture.md, "Baselines"): Random and Constant.
 
 Both follow the discovery interface shared by every method: called with a batch of clips
 ``frames`` (B, L, C, H, W) and their valid future lengths (B,), they return per clip the future

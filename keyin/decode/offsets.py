@@ -1,4 +1,4 @@
-"""The paper's keyframe readout (§3.9, REFERENCE §3.9): positions as the sums of argmax offsets."""
+"""The paper's keyframe readout (paper §3.1): positions as the sums of argmax offsets."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def offset_keyframes(offset_probs: Tensor, future_length: Tensor) -> list[list[i
 
 
 def keyframe_probabilities(offset_probs: Tensor, n_future: int) -> Tensor:
-    """The probability that a keyframe sits at each future position under δ (REFERENCE §3.2).
+    """The probability that a keyframe sits at each future position under δ (paper Alg. 2).
 
     Keyframes sit at strictly increasing positions, so "keyframe t at j" are disjoint events over
     t and their probabilities ``D^t[j + 1]`` add up to the probability of a keyframe at j.

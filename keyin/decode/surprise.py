@@ -1,4 +1,4 @@
-"""Surprise keyframes (paper Algorithm 3, corrected in REFERENCE §4): peaks of the per-step KL.
+"""Surprise keyframes (paper Algorithm 3, read as in docs/architecture.md, "Baselines"): peaks of the per-step KL.
 
 A stochastic video model's posterior KL ``s_t = KL[q(z_t | I_≤t) ‖ N(0, I)]`` is large where the
 next frame is hard to predict. The first frame that reveals a direction change at vertex k is
@@ -54,7 +54,7 @@ def surprise_keyframes(
         future_length: (B,) valid future frames n_b.
         n_cond: conditioning frames at the start of each clip.
         n_keyframes: M.
-        shift: added to a peak's future index (REFERENCE §4: -1).
+        shift: added to a peak's future index (docs/architecture.md, "Baselines": -1).
     Returns:
         Per clip, up to M future positions in ``0 … n_b - 1``, increasing.
     """

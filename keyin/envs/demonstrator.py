@@ -1,4 +1,4 @@
-"""Rule-based pushing demonstrator (REFERENCE §6.2, paper App. 7).
+"""Rule-based pushing demonstrator (paper App. 7; docs/pushing.md).
 
 1. Choose a detour side (either end of the wall, uniformly) and draw ``n_pushes`` subgoals along
    the polyline start -> two detour corners -> goal, where the corners sit ``detour_margin`` outside

@@ -2,13 +2,13 @@
 
 A wall is five numbers ``(cx, cy, half_length, half_thickness, angle)``: a box centred at
 ``(cx, cy)`` whose long axis makes ``angle`` radians with the world x axis. The position error of
-the planning evaluation (REFERENCE §5.2) is the length of the shortest path of the puck's centre
+the planning evaluation (paper §4.2) is the length of the shortest path of the puck's centre
 from its position to the goal around the wall *inflated by the puck radius* (the set of centre
 positions where the puck would overlap the wall): the Euclidean distance when the straight segment
 is clear, otherwise Dijkstra on the visibility graph of {start, goal, the four inflated corners}.
 The inflation keeps square corners: a path turning by theta at a corner is
 ``radius * (2 tan(theta / 2) - theta)`` longer than round the exact, rounded Minkowski sum (at most
-``(2 - pi / 2) * radius`` ~ 0.026 for a 90-degree turn of the puck). REFERENCE §5.2 defines the
+``(2 - pi / 2) * radius`` ~ 0.026 for a 90-degree turn of the puck). docs/planning.md ("The servo") defines the
 metric on the inflated box, and so does this module.
 
 Pixel coordinates are continuous ``(u, v)`` = (column, row) with the image's top-left corner at

@@ -1,4 +1,4 @@
-"""Random layouts of the pushing scene: wall, puck start and goal (REFERENCE §6.2, docs/pushing.md).
+"""Random layouts of the pushing scene: wall, puck start and goal (paper App. 7, docs/pushing.md).
 
 All lengths are world units on a table whose free area is ``[-arena_half, arena_half]²`` (the
 camera sees ``[-1, 1]²``). In the wall frame (along the wall, along its normal):

@@ -1,4 +1,4 @@
-"""The pushing task on dm_control (REFERENCE §6.2, docs/pushing.md), after ``suite/point_mass.py``.
+"""The pushing task on dm_control (paper App. 7, docs/pushing.md), after ``suite/point_mass.py``.
 
 A top-down table ``[-1, 1]²`` with a low border, one wall with random length, angle and offset, a
 purple puck and an orange pusher (the arm's end effector), each a sphere on two planar slide
@@ -6,7 +6,7 @@ joints. Planar slide joints get no table friction, so the puck's joints carry da
 friction (``frictionloss``): it stops within about 0.02 once the pusher lets go (quasi-static
 pushing). The pusher is driven by two velocity servos: an action ``a`` in ``[-1, 1]²`` commands the
 velocity ``v_max * a``. Actions outside ``[-1, 1]`` are **clipped** per component (the planner's
-CEM clips its samples to ``a_max = 1`` the same way, REFERENCE §7.2); non-finite actions raise
+CEM clips its samples to ``a_max = 1`` the same way, paper App. 10); non-finite actions raise
 ``ValueError``. One environment step is ``control_timestep = 0.1`` s (10 physics steps of 10 ms);
 the dataset keeps every second frame.
 
@@ -33,7 +33,7 @@ from keyin.envs.layout import Layout, LayoutSampler
 from keyin.envs.segmentation import PUCK_RGB, PUSHER_RGB
 
 SUITE = containers.TaggedTasks()
-DEFAULT_TIME_LIMIT = 12.0  # s: 120 control steps = 60 saved frames = the servo's T_max (REFERENCE §7.2)
+DEFAULT_TIME_LIMIT = 12.0  # s: 120 control steps = 60 saved frames = the servo's T_max (paper Table 3)
 CAMERA = "top"
 REWARD_MARGIN = 1.5  # path length beyond the goal tolerance at which the reward reaches 0
 # Flat RGB colours of the geoms (ambient-only lighting renders them unchanged).
@@ -267,7 +267,7 @@ class Pushing(base.Task):
         physics.set_control(np.clip(action, -1.0, 1.0))
 
     def goal_distance(self, physics: PushingPhysics) -> float:
-        """Shortest-path distance of the puck to the goal around the inflated wall (REFERENCE §5.2)."""
+        """Shortest-path distance of the puck to the goal around the inflated wall (paper §4.2)."""
         return shortest_path_length(
             physics.puck_position(), self.layout.goal, self.layout.wall, self._scene.puck_radius
         )

@@ -1,7 +1,7 @@
 """Puck centroid by colour segmentation: ground-truth check of the camera and the planner's cost.
 
 Each pixel gets a soft weight ``w = clip(1 - d / tau, 0, 1)`` from the Euclidean distance ``d``
-between its RGB colour (in [0, 1]) and the puck colour (REFERENCE §7.1); the centroid is the
+between its RGB colour (in [0, 1]) and the puck colour (paper App. 10); the centroid is the
 weighted mean pixel centre, in the continuous (column, row) convention of
 :mod:`keyin.envs.geometry` (pixel ``[r, c]`` has centre ``(c + 0.5, r + 0.5)``). Works on numpy
 arrays and on torch tensors (predicted images), channels last, any leading batch shape.
@@ -86,7 +86,7 @@ def centroid_distance(
 ) -> Any:
     """Pixel distance between the puck centroids of two image batches (the planner's image cost).
 
-    A frame without a visible puck costs the image diagonal (REFERENCE §7.1).
+    A frame without a visible puck costs the image diagonal (docs/architecture.md, "Planning").
 
     Args:
         images, targets: (..., H, W, 3), broadcastable against each other.

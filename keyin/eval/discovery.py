@@ -80,7 +80,7 @@ def save_predictions(found: dict[str, Discovered], folder: Path) -> Path:
     (method → per clip) on every scored clip, in order.
 
     ``keyin-report`` draws its method-comparison figure from the first clips of these files;
-    ``benchmarks/recall_by_turn.py`` reads all of them.
+    ``studies/recall_by_turn.py`` reads all of them.
     """
     first = next(iter(found.values()))
     record = {

@@ -1,4 +1,4 @@
-"""Keyframe discovery metrics (REFERENCE §5.1): exact-match micro F1 and its companions.
+"""Keyframe discovery metrics (paper §4.1.2, Table 1; docs/evaluation.md): exact-match micro F1 and its companions.
 
 Keyframes are sets of future-frame indices per clip. The primary score is micro F1 over the test
 set, ``2·ΣTP / (Σ|P| + Σ|G|)``, with exact index matches. Secondary: macro F1 (mean per-clip F1),

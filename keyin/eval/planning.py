@@ -1,7 +1,7 @@
-"""Planning metrics (paper Table 2, REFERENCE §5.2) from per-task final position errors.
+"""Planning metrics (paper Table 2, §4.2) from per-task final position errors.
 
 The position error is the shortest path around the wall from the final puck to the goal. The paper
-gives no success threshold; REFERENCE §5.2 reads about half the initial distance from its numbers,
+gives no success threshold; docs/planning.md ("Success threshold") reads about half the initial distance from Table 2,
 so the threshold is a setting (world units) and the success-vs-threshold curve is reported too.
 """
 

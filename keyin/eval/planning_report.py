@@ -21,7 +21,7 @@ from keyin.eval.planning import OUTCOMES, bootstrap_interval, planning_summary, 
 from keyin.eval.report import Roots, group_by_seed, is_planning, read_metrics
 from keyin.io import read_json_lines
 
-# Paper Table 2 (REFERENCE §5.3): position error mean, std and success rate in % (None: "-"). A learned
+# Paper Table 2 (paper §4.2): position error mean, std and success rate in % (None: "-"). A learned
 # row is named after the model it plans with; the paper's KEYIN stands beside keyin_paper (its method)
 # and beside keyin_plus (ours).
 PAPER_TABLE2 = {

@@ -21,7 +21,7 @@ import numpy as np
 
 from keyin import RENAMED_SINCE_0_1
 
-# Paper Table 1 (keyframe F1; REFERENCE §5.3). Jumpy is not in it (its keyframes are Constant's).
+# Paper Table 1 (keyframe F1; paper §4.1.2). Jumpy is not in it (its keyframes are Constant's).
 # KEYIN's figure stands beside the paper's method (keyin_paper) and beside ours (keyin_plus).
 PAPER_TABLE1 = {
     "brownian": {"random": 0.15, "constant": 0.17, "static": 0.21, "surprise": 0.73, "keyin_paper": 0.84, "keyin_plus": 0.84},

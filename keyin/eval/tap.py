@@ -1,4 +1,4 @@
-"""TAP on the test split (REFERENCE §4): its loss between each clip's first and last valid frame,
+"""TAP on the test split (paper §4.2; docs/baselines.md): its loss between each clip's first and last valid frame,
 where in time its predictions land, and a picture of them. TAP finds no keyframes, so it has no
 keyframe F1; these are its metrics."""
 

@@ -1,4 +1,4 @@
-"""Video-prediction scores (REFERENCE §5.4, not in the paper's tables): PSNR and SSIM of predicted
+"""Video-prediction scores (docs/evaluation.md, not in the paper's tables): PSNR and SSIM of predicted
 futures against the true ones, per frame, averaged over each clip's valid frames (padding never
 counts), then summarised over samples: ``best_of_k`` = per clip the best of the k samples, averaged
 over clips (the best sample for PSNR and the one for SSIM may differ); ``mean`` = averaged over
@@ -32,7 +32,7 @@ def frame_scores(predicted: Tensor, target: Tensor) -> dict[str, Tensor]:
 
 
 def clip_scores(predicted: Tensor, target: Tensor, future_length: Tensor) -> dict[str, Tensor]:
-    """Mean PSNR and SSIM over each clip's valid future frames (REFERENCE §3.8).
+    """Mean PSNR and SSIM over each clip's valid future frames (docs/architecture.md, "Padding and masking").
 
     Args:
         predicted, target: (B, N, C, H, W) future frames in [0, 1].

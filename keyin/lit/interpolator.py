@@ -1,4 +1,4 @@
-"""Stage 1: the stochastic interpolator with its encoder and decoder (REFERENCE §2.5, §2.7a).
+"""Stage 1: the stochastic interpolator with its encoder and decoder (paper §3.2 "Training procedure", §4).
 
 Trains CNN_enc, CNN_dec, MLP_init_inter and LSTM_inter on random segments of clips: the
 interpolator sees the two boundary embeddings and the offset and must render the frames between

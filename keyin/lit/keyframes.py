@@ -1,4 +1,4 @@
-"""Stage 2: the keyframe predictor trained through the frozen interpolator (REFERENCE §2.4, §2.7-2.8).
+"""Stage 2: the keyframe predictor trained through the frozen interpolator (paper §3.1-3.2).
 
 The encoder, decoder and interpolator of stage 1 are frozen (``requires_grad=False`` and
 ``.eval()``, re-asserted at every epoch and batch start) but gradients flow *through* them into
@@ -104,7 +104,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         self.model.freeze_stage1(self.hparams.frozen)
 
     def train(self, mode: bool = True) -> "KeyframeModule":
-        """Switch the trainable parts; stage 1 stays frozen in eval mode (REFERENCE §8.1)."""
+        """Switch the trainable parts; stage 1 stays frozen in eval mode (docs/architecture.md, "Frozen modules")."""
         super().train(mode)
         self.freeze_stage1()
         return self
@@ -114,7 +114,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"], self.stage)
 
     def on_train_batch_start(self, batch: Any, batch_idx: int) -> None:
-        self.freeze_stage1()  # whatever switched modes since (REFERENCE §8.1)
+        self.freeze_stage1()  # whatever switched modes since (docs/architecture.md, "Frozen modules")
 
     def soft_loss(self, clips: torch.Tensor, future_length: torch.Tensor, out: dict[str, torch.Tensor | None]) -> dict[str, torch.Tensor]:
         """The paper's loss (:func:`keyin.losses.soft_keyframe.keyin_loss`) of a posterior forward ``out``

@@ -1,4 +1,4 @@
-"""The Surprise baseline: SVG-FP trained on whole clips, keyframes at peaks of its KL (REFERENCE §4).
+"""The Surprise baseline: SVG-FP trained on whole clips, keyframes at peaks of its KL (paper §4.1.2, App. 9).
 
 One stage: encoder, decoder and the SVG core learn to predict every frame from the one before and
 a latent from the posterior ``q(z_t | I_≤t)``, with a KL to the fixed prior N(0, I). Where the
@@ -141,7 +141,7 @@ class SurpriseModule(L.LightningModule):
         }
 
     def discoverers(self, name: str) -> dict[str, Callable]:
-        """The method as configured, and the other index reading REFERENCE §4 asks to report."""
+        """The method as configured, and the other index reading (docs/architecture.md, "Baselines")."""
         other = 0 if self.hparams.shift != 0 else -1
         return {name: self.discover, f"{name}_shift{other}": functools.partial(self.discover, shift=other)}
 

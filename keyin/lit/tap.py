@@ -1,5 +1,5 @@
 """The TAP baseline of Table 2: a subgoal between a start and a goal frame, trained with the
-minimum-over-time loss (REFERENCE §4 "TAP details"; Jayaraman et al. 2019).
+minimum-over-time loss (paper §4.2; Jayaraman et al. 2019).
 
 One stage. Each training step draws per clip a start a and a goal b inside its valid frames
 (:func:`keyin.losses.tap.sample_pairs`: b - a uniform in [min_gap, max_gap], then a uniform),

@@ -1,4 +1,4 @@
-"""Stage 1's training terms (REFERENCE §2.5, §2.7a): the image likelihood of interpolated segments
+"""Stage 1's training terms (paper §3.2 "Training procedure", §4): the image likelihood of interpolated segments
 and of auto-encoded frames, and the per-offset contrast that gates stage 2.
 
 The decoder is passed in as a callable ((R, E) embeddings → (R, C, H, W) logits), so these stay

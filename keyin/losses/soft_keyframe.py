@@ -1,10 +1,10 @@
 """KEYIN's soft keyframe loss (paper Algorithm 2, eq. 3-5) as vectorised tensor operations.
 
 Where keyframes and frames sit given the offsets (the position distributions, the soft frames) is
-:mod:`keyin.models.positions`, with its index conventions (REFERENCE §1, §3.2).
+:mod:`keyin.models.positions`, with its index conventions (docs/architecture.md, "Index conventions").
 
 Clips may have different valid lengths ``n_b <= N`` (``lengths``); positions ``>= n_b`` are
-excluded from ``c^t``, from the keyframe targets and from ``L_inter`` (REFERENCE §3.8).
+excluded from ``c^t``, from the keyframe targets and from ``L_inter`` (docs/architecture.md, "Padding and masking").
 """
 
 import torch
@@ -26,13 +26,13 @@ pixels and frames, ``ℓ_ke`` over embedding dims, ``ℓ_KL`` over latent dims."
 
 
 def _inside_keyframe_pos(keyframe_pos: Tensor, lengths: Tensor, n_future: int) -> Tensor:
-    """``D^t`` on positions 0 ... n_b - 1: (B, M, L_ext) → (B, M, N) (REFERENCE §3.4)."""
+    """``D^t`` on positions 0 ... n_b - 1: (B, M, L_ext) → (B, M, N) (paper Alg. 2)."""
     frame_mask = valid_frame_mask(lengths, n_future)
     return future_window(keyframe_pos, n_future) * frame_mask[:, None, :]
 
 
 def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:
-    """Probability ``c^t`` that keyframe t lies inside the clip (REFERENCE §3.3).
+    """Probability ``c^t`` that keyframe t lies inside the clip (paper §3.2, Alg. 2).
 
     Args:
         keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
@@ -47,7 +47,7 @@ def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:
 def soft_keyframe_targets(
     keyframe_pos: Tensor, lengths: Tensor, future: Tensor, normalize: bool
 ) -> Tensor:
-    """Expected ground-truth keyframes ``K̃^t = Σ_{j<n_b} D^t[j+1] future_j`` (REFERENCE §3.4).
+    """Expected ground-truth keyframes ``K̃^t = Σ_{j<n_b} D^t[j+1] future_j`` (paper §3.2, Alg. 2).
 
     Args:
         keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
@@ -73,7 +73,7 @@ def soft_keyframe_targets(
 def bce_sum(
     probs: Tensor, targets: Tensor, mask: Tensor | None = None, weights: Tensor | None = None
 ) -> Tensor:
-    """Binary cross-entropy on probabilities, summed over pixels (REFERENCE §3.6, §8.6, §8.12).
+    """Binary cross-entropy on probabilities, summed over pixels (paper §4; docs/architecture.md, "Clamps and precision").
 
     Probabilities are clamped to [1e-6, 1 - 1e-6]; mixtures of sigmoid outputs have no logits, so
     the logits form cannot be used.
@@ -121,7 +121,7 @@ def interpolation_loss(
 
 
 def _at_least_float32(tensor: Tensor) -> Tensor:
-    """Upcast half/bfloat16 to float32 and keep float64 (REFERENCE §3.8: mixed precision)."""
+    """Upcast half/bfloat16 to float32 and keep float64 (docs/architecture.md, "Clamps and precision")."""
     return tensor if tensor.dtype in (torch.float32, torch.float64) else tensor.float()
 
 
@@ -142,7 +142,7 @@ def keyin_loss(
     reduction: str = "sum",
     latent_dim: int | None = None,
 ) -> dict[str, Tensor]:
-    """KEYIN stage-2 loss ``L_key + L_inter`` (paper eq. 3-5, REFERENCE §3.6).
+    """KEYIN stage-2 loss ``L_key + L_inter`` (paper eq. 3-5; docs/architecture.md, "Reductions").
 
     ``L_key = Σ_t c^t (β_ki ℓ_ki^t + β_ke ℓ_ke^t + β_KL ℓ_KL^t) / Σ_t c^t`` with
     ``ℓ_ke^t = ‖K̂^{e,t} - K̃^{e,t}‖²`` and ``ℓ_ki^t = BCE_sum(K̂^t, K̃^t)``;
@@ -160,7 +160,7 @@ def keyin_loss(
         beta_ke: weight of the embedding term.
         beta_ki: weight of the keyframe-image term; needs ``key_frames_pred`` when > 0.
         beta_kl: weight of the KL term.
-        normalize_key_targets: divide the soft keyframe targets by c^t (REFERENCE §3.4).
+        normalize_key_targets: divide the soft keyframe targets by c^t (docs/architecture.md, "Clamps and precision").
         key_frames_pred: (B, M, D) decoded keyframes K̂^t as probabilities.
         pixel_weights: (B, N, D) weights of the future frames' pixels in ``L_inter``
             (keyin/losses/image.py); None: the plain BCE.

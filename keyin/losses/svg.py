@@ -1,4 +1,4 @@
-"""The Surprise baseline's loss (SVG-FP, REFERENCE §4): per-step prediction BCE and KL to the fixed
+"""The Surprise baseline's loss (SVG-FP, paper App. 9): per-step prediction BCE and KL to the fixed
 prior N(0, I), an optional auto-encoding BCE, and the KL weight's schedule.
 
 Clips have L frames, the first ``n_cond`` conditioning; step t predicts frame t from frame t - 1, so

@@ -1,9 +1,9 @@
-"""Time-agnostic prediction's minimum-over-time loss (Jayaraman et al. 2019; REFERENCE §4 "TAP details").
+"""Time-agnostic prediction's minimum-over-time loss (Jayaraman et al. 2019; paper §4.2).
 
 TAP predicts one frame between a start frame ``I_a`` and a goal frame ``I_b`` of a clip and is
 scored against whichever admissible frame it resembles most: the loss is the minimum over the
 admissible t of the frame's BCE, so the network may pick its own time. Admissible are the frames
-``a + margin < t < b - margin`` inside the clip's valid frames (REFERENCE §4 [PROP]: candidates
+``a + margin < t < b - margin`` inside the clip's valid frames (docs/architecture.md, "Baselines": candidates
 ``a < t < b`` minus an end margin); padding never is.
 
 Frame indices here run over the whole clip, conditioning frames included (0 … L-1).
@@ -147,7 +147,7 @@ def min_over_time_bce(
     reproduce: neither for holding less entropy nor, under per-frame pixel weights (changed pixels weigh
     more, keyin/losses/image.py), for weighing fewer pixels, which made the frames next to the start
     the cheapest whatever the prediction (docs/baselines.md). The loss is the chosen frame's BCE with
-    its weights. The logits form needs no clipping of probabilities (REFERENCE §8.12). The gradient
+    its weights. The logits form needs no clipping of probabilities (docs/architecture.md, "Clamps and precision"). The gradient
     reaches the prediction through the chosen frame only.
 
     Args:

@@ -1,4 +1,4 @@
-"""Neural-network modules of KEYIN and its baselines (REFERENCE §2); nn.Modules only, no losses."""
+"""Neural-network modules of KEYIN and its baselines (paper §3.1); nn.Modules only, no losses."""
 
 from keyin.models.attention import attention_posterior
 from keyin.models.conv import ConvDecoder, ConvEncoder

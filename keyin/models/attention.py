@@ -1,4 +1,4 @@
-"""Key-value attention posterior over the future frames (paper eq. 1-2, REFERENCE §2.4 step 4)."""
+"""Key-value attention posterior over the future frames (paper §3.1, eq. 1-2)."""
 
 import math
 
@@ -18,11 +18,12 @@ def attention_posterior(
 
     Eq. 1-2: α_j = softmax_j(⟨query, key_j⟩) over the valid frames, [μ, log σ] = Σ_j α_j τ_j — the
     Gaussian parameters themselves (μ and log σ, not σ) are averaged. With `scale`, the scores are
-    divided by √E (unscaled E-dim inner products make the softmax peaked from the start, REFERENCE
-    §2.4); `inv_temperature` always multiplies them (pass a learnable scalar, or 1.0 for the paper).
+    divided by √E (unscaled E-dim inner products make the softmax peaked from the start;
+    docs/architecture.md, "Sizes the paper does not give"); `inv_temperature` always multiplies
+    them (pass a learnable scalar, or 1.0 for the paper).
 
     Masked frames get score −∞. A row with no valid frame would give 0/0 = NaN in the softmax
-    (REFERENCE §8.10); there the weights are all zero and so μ = log σ = 0, i.e. the posterior falls
+    (docs/architecture.md, "Padding and masking"); there the weights are all zero and so μ = log σ = 0, i.e. the posterior falls
     back to the prior N(0, I) (a KL of zero), with finite gradients.
 
     Args:

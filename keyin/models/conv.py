@@ -1,4 +1,4 @@
-"""DCGAN-style convolutional frame encoder and decoder (REFERENCE §2.2).
+"""DCGAN-style convolutional frame encoder and decoder (paper §3.1, §4).
 
 The encoder has log2(H) - 2 stride-2 blocks (3 at 32×32, 4 at 64×64, as the paper's "three / four
 layers") and a 4×4 valid head to a 1×1 embedding; the decoder mirrors it. Optional CoordConv inputs
@@ -16,7 +16,7 @@ MAX_GROUPS = 8
 
 
 def conv_depth(image_size: int) -> int:
-    """Number of stride-2 blocks for a square image (REFERENCE §2.2).
+    """Number of stride-2 blocks for a square image (paper §4: three at 32x32, four at 64x64).
 
     Args:
         image_size: H = W; a power of two, at least 8.
@@ -80,7 +80,7 @@ def _check_norm(norm: str) -> None:
 
 
 class ConvEncoder(nn.Module):
-    """Frames in [0, 1] → tanh embeddings (REFERENCE §2.2, CNN_enc).
+    """Frames in [0, 1] → tanh embeddings (paper §3.1, CNN_enc).
 
     Stride-2 conv4 blocks with widths F, 2F, 4F (, 8F), LeakyReLU(0.2), normalisation on all but the
     first block, then a 4×4 valid conv head to E and tanh (keeps embedding-space MSE well scaled).
@@ -155,7 +155,7 @@ class ConvEncoder(nn.Module):
 
 
 class ConvDecoder(nn.Module):
-    """Embeddings → frame logits, the mirror of ConvEncoder (REFERENCE §2.2, CNN_dec).
+    """Embeddings → frame logits, the mirror of ConvEncoder (paper §3.1, CNN_dec).
 
     A 4×4 transposed conv from 1×1 to 4×4, then stride-2 transposed conv4 blocks halving the width
     up to H; normalisation and LeakyReLU(0.2) after every layer but the last. The output is

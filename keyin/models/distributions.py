@@ -6,7 +6,7 @@ from torch import Tensor
 
 
 def gaussian_kl(mu: Tensor, log_sigma: Tensor) -> Tensor:
-    """KL(N(mu, sigma^2) || N(0, I)) summed over the last dimension (REFERENCE §3.6).
+    """KL(N(mu, sigma^2) || N(0, I)) summed over the last dimension (paper eq. 3).
 
     Args:
         mu: (..., Z) means.

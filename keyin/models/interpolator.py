@@ -1,8 +1,8 @@
-"""The interpolator LSTM_inter with MLP_init_inter, and its seq2seq-VAE posterior (REFERENCE §2.5).
+"""The interpolator LSTM_inter with MLP_init_inter, and its seq2seq-VAE posterior (paper §3.1-3.2).
 
 Step inputs (`step_input`):
 
-* "autoregressive" (REFERENCE §2.4 step 5): step i reads [Î^e_{i-1}, z] with Î^e_{-1} = start. Every
+* "autoregressive" (paper §3.1, "Intermediate prediction"): step i reads [Î^e_{i-1}, z] with Î^e_{-1} = start. Every
   output is built on the previous output, so errors compound along the segment, and the step index
   and the offset are only available through the recurrent state. The prototype's interpolator of
   this kind had an error growing almost linearly with the offset (PROTOTYPE-FINDINGS §2), which
@@ -24,11 +24,11 @@ LATENTS = ("posterior", "prior", "mean")
 
 
 class Interpolator(nn.Module):
-    """Predicts the S frame embeddings of a segment from its boundary keyframes (REFERENCE §2.5).
+    """Predicts the S frame embeddings of a segment from its boundary keyframes (paper §3.1).
 
     MLP_init_inter([start, end, δ, z]) gives the full initial state of LSTM_inter (h and c of every
     layer), which is unrolled for S steps with a tanh output head. Output i is the frame at position
-    p^{t-1} + 1 + i and is meaningful iff the offset is ≥ i + 1 (REFERENCE §1).
+    p^{t-1} + 1 + i and is meaningful iff the offset is ≥ i + 1 (docs/architecture.md, "Index conventions").
 
     Args:
         embed_dim: E.
@@ -113,7 +113,7 @@ class Interpolator(nn.Module):
 
 
 class InterpolatorPosterior(nn.Module):
-    """q(z_i | segment): a 1-layer LSTM over the target embeddings (REFERENCE §2.5, stage 1 only).
+    """q(z_i | segment): a 1-layer LSTM over the target embeddings (paper §3.2, a seq2seq VAE; stage 1 only).
 
     Only built for a stochastic interpolator (latent_dim ≥ 1); a deterministic one needs none.
 

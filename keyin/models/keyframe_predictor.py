@@ -1,4 +1,4 @@
-"""The keyframe predictor: LSTM_cond, LSTM_inf + attention posterior, LSTM_key (REFERENCE §2.3a, §2.4).
+"""The keyframe predictor: LSTM_cond, LSTM_inf + attention posterior, LSTM_key (paper §3.1).
 
 Also the Static and Jumpy baselines, which differ only in where the offset distributions come from
 (`offset_mode`, :mod:`keyin.models.offset_heads`).
@@ -53,7 +53,7 @@ class KeyframeOutput(NamedTuple):
 
 
 class KeyframePredictor(nn.Module):
-    """Predicts M keyframe embeddings and their offset distributions (REFERENCE §2.4 steps 2-4).
+    """Predicts M keyframe embeddings and their offset distributions (paper §3.1, eq. 1-2).
 
     LSTM_cond runs over the conditioning embeddings; its final state initialises LSTM_key
     (Init_key = Final_cond, so both share `hidden` and `layers`). In posterior mode a bidirectional

@@ -1,4 +1,4 @@
-"""KEYIN's generative model (paper §3, REFERENCE §2.4): encoder, keyframe predictor, interpolator, decoder.
+"""KEYIN's generative model (paper §3.1): encoder, keyframe predictor, interpolator, decoder.
 
 One module for everything that runs the model: training and discovery use the posterior forward
 (:meth:`KEYIN.forward`), video prediction the prior forward, and planning renders the keyframes of
@@ -21,14 +21,14 @@ from keyin.models.positions import argmax_frames
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
 # What stage 2 freezes (an open choice: the paper writes "we freeze LSTM_inter weights and only use it to
-# backpropagate the error to the rest of the model"; REFERENCE §2.8 freezes all of stage 1):
+# backpropagate the error to the rest of the model"; our default, all of stage 1: docs/architecture.md, "Frozen modules"):
 FROZEN_IN_STAGE2 = {
     "stage1": STAGE1,  # everything stage 1 trained (our default)
     "interpolator": ("interpolator",),  # MLP_init_inter and LSTM_inter; the encoder and decoder train on
     "lstm_inter": ("interpolator.lstm",),  # LSTM_inter alone, as the paper's sentence reads
 }
 # What the frozen interpolator is told of each segment's offset in stage 2 (an open choice of the paper,
-# REFERENCE §9.1; docs/decisions.md): "soft" δ^t itself, "argmax" onehot(argmax δ^t) as the paper writes
+# docs/decisions.md, issue 43): "soft" δ^t itself, "argmax" onehot(argmax δ^t) as the paper writes
 # (δ̂^t, "hat" = argmax) and as stage 1 trained on, "straight_through" that one-hot forward and δ^t's
 # gradient backward.
 DELTA_INPUTS = ("soft", "argmax", "straight_through")

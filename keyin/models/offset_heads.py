@@ -1,4 +1,4 @@
-"""Where keyframe offsets come from: the one place KEYIN, Static and Jumpy differ (REFERENCE §2.4).
+"""Where keyframe offsets come from: the one place KEYIN, Static and Jumpy differ (paper §3.1, §4 "Baselines").
 
 Each head maps LSTM_key's outputs (B, M, hidden) to offset logits (B, M, S) over offsets 1…S:
 KEYIN predicts them per keyframe, Static learns one pattern shared by every clip, Jumpy fixes one

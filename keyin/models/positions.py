@@ -1,9 +1,9 @@
-"""Where keyframes and frames sit, given offset distributions (paper Alg. 2, REFERENCE §3.2-3.5, §3.9).
+"""Where keyframes and frames sit, given offset distributions (paper Alg. 2, §3.1-3.2).
 
-Index conventions follow REFERENCE §1: ``offset_probs[..., a]`` is the probability of offset
+Index conventions (docs/architecture.md, "Index conventions"): ``offset_probs[..., a]`` is the probability of offset
 ``a + 1``; keyframe ``K^0`` sits at position -1; the future frames ``I_0 ... I_{N-1}`` sit at
 positions ``0 ... N-1``. Every distribution over positions is stored on the *extended index*
-``k = position + 1`` (``k = 0`` is ``K^0``), of length ``L_ext = M * S + 1`` (REFERENCE §3.2).
+``k = position + 1`` (``k = 0`` is ``K^0``), of length ``L_ext = M * S + 1`` (the same section).
 The soft keyframe loss (:mod:`keyin.losses.soft_keyframe`) and the model's readout video
 (:meth:`keyin.models.KEYIN.argmax_video`) both build on these.
 """
@@ -13,7 +13,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 PROB_EPS = 1e-6
-"""Clamp of BCE probabilities, coverage and ``c^t`` normalisers (REFERENCE §3.5, §8.12)."""
+"""Clamp of BCE probabilities, coverage and ``c^t`` normalisers (docs/architecture.md, "Clamps and precision")."""
 
 
 def initial_position(batch: int, n_ext: int, like: Tensor) -> Tensor:
@@ -40,7 +40,7 @@ def shifted_positions(previous_pos: Tensor, max_offset: int) -> Tensor:
 
 
 def position_distributions(offset_probs: Tensor) -> tuple[Tensor, Tensor]:
-    """Keyframe and per-frame position distributions by shift-and-weight (REFERENCE §3.2, §3.5).
+    """Keyframe and per-frame position distributions by shift-and-weight (paper Alg. 2).
 
     With ``X^t[b, a, k] = D^{t-1}[b, k - a - 1]`` (``D^0 = onehot(k = 0)``):
     ``D^t = Σ_a δ^t[a] X^t[a]`` and ``Wt^t[i] = e^t[i] X^t[i]`` with ``e^t[i] = P(o^t >= i + 1)``.
@@ -68,17 +68,17 @@ def position_distributions(offset_probs: Tensor) -> tuple[Tensor, Tensor]:
 
 
 def future_window(extended: Tensor, n_future: int) -> Tensor:
-    """Extended indices 1 ... N (positions 0 ... N-1) of the last dimension (REFERENCE §3.4)."""
+    """Extended indices 1 ... N (positions 0 ... N-1) of the last dimension (paper Alg. 2)."""
     if extended.shape[-1] < n_future + 1:
         raise ValueError(
             f"M*S = {extended.shape[-1] - 1} positions cannot cover N = {n_future} future frames; "
-            "REFERENCE §1 requires M*S >= N"
+            "keyin requires M*S >= N (docs/architecture.md, Index conventions)"
         )
     return extended[..., 1 : n_future + 1]
 
 
 def valid_frame_mask(lengths: Tensor, n_future: int) -> Tensor:
-    """Which future positions lie inside each clip (REFERENCE §3.8).
+    """Which future positions lie inside each clip (docs/architecture.md, "Padding and masking").
 
     Args:
         lengths: (B,) int, valid future frames n_b <= N.
@@ -93,7 +93,7 @@ def valid_frame_mask(lengths: Tensor, n_future: int) -> Tensor:
 def soft_frames(
     frame_pos: Tensor, predicted: Tensor, n_future: int, eps: float = PROB_EPS
 ) -> tuple[Tensor, Tensor]:
-    """Mix the interpolator's outputs into one expected frame per position (REFERENCE §3.5).
+    """Mix the interpolator's outputs into one expected frame per position (paper §3.2, Alg. 2).
 
     Each position's mixture depends only on the outputs that can land there, so clip lengths play
     no role here: positions >= n_b are dropped by the loss.
@@ -122,7 +122,7 @@ def soft_frames(
 
 
 def argmax_positions(offset_probs: Tensor) -> Tensor:
-    """Most likely position of each keyframe, from argmax offsets (REFERENCE §1, §3.9).
+    """Most likely position of each keyframe, from argmax offsets (paper §3.1; docs/architecture.md, "Index conventions").
 
     Args:
         offset_probs: (B, M, S); entry a is the probability of offset a + 1.
@@ -134,7 +134,7 @@ def argmax_positions(offset_probs: Tensor) -> Tensor:
 
 
 def argmax_frames(offset_probs: Tensor, predicted: Tensor, n_future: int) -> Tensor:
-    """The video of the most likely offsets (REFERENCE §3.9): the soft mixture at one-hot δ.
+    """The video of the most likely offsets (paper §3.1): the soft mixture at one-hot δ.
 
     Args:
         offset_probs: (B, M, S).

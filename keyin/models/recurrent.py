@@ -1,4 +1,4 @@
-"""Recurrent building blocks shared by every recurrent module (REFERENCE §2.3).
+"""Recurrent building blocks shared by every recurrent module (paper §4).
 
 The paper: "a simple two-layer LSTM with a 256-dimensional state in each layer for all recurrent
 modules. Each LSTM has a linear projection layer before and after it."
@@ -16,7 +16,7 @@ def init_forget_bias(lstm: nn.LSTM) -> None:
 
     nn.LSTM adds two biases, `bias_ih` and `bias_hh`, with gates ordered (input, forget, cell, output);
     the forget slice of `bias_ih` is set to 1 and that of `bias_hh` to 0, so their sum is exactly 1
-    (blox-nn fills both with 1, an effective 2; REFERENCE §2.3). Long memory at init helps the
+    (blox-nn fills both with 1, an effective 2). Long memory at init helps the
     keyframe LSTM carry the conditioning state across M steps.
 
     Args:
@@ -52,7 +52,7 @@ def state_from_vector(state_vector: Tensor, layers: int, hidden: int) -> LSTMSta
 
 
 class LSTMBlock(nn.Module):
-    """Linear → multi-layer nn.LSTM → Linear (REFERENCE §2.3).
+    """Linear → multi-layer nn.LSTM → Linear (paper §4).
 
     Args:
         input_dim: size of each step's input.

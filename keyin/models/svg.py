@@ -1,4 +1,4 @@
-"""SVG-FP, the Surprise baseline's model (REFERENCE §4; Denton & Fergus 2018): its recurrent core
+"""SVG-FP, the Surprise baseline's model (paper App. 9; Denton & Fergus 2018): its recurrent core
 and the whole model around it.
 
 At step t the frame predictor reads ``[enc(I_{t-1}), z_t]`` and emits the embedding of ``I_t``;

@@ -1,4 +1,4 @@
-"""TAP's goal-conditioned bottleneck predictor (Jayaraman et al. 2019; REFERENCE §4 "TAP details").
+"""TAP's goal-conditioned bottleneck predictor (Jayaraman et al. 2019; paper §4.2).
 
 Start and goal frames are embedded by one shared encoder, their embeddings concatenated and
 squeezed through an MLP bottleneck, and one frame between them is decoded. The encoder and decoder

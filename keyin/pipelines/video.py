@@ -1,7 +1,7 @@
-"""Video-prediction diagnostics of a stage-2 model (REFERENCE §5.4, not in the paper's tables): the
+"""Video-prediction diagnostics of a stage-2 model (docs/evaluation.md, not in the paper's tables): the
 model's predicted futures, scored by :mod:`keyin.eval.video`, and the pictures of them.
 
-Each predicted future is the argmax-offset video (REFERENCE §3.9) of the posterior mean
+Each predicted future is the argmax-offset video (paper §3.1) of the posterior mean
 (``mode="posterior"``, ``sample=False``: the reconstruction) or of a prior sample (``mode="prior"``,
 ``sample=True``: a prediction from the conditioning frames alone).
 """

@@ -1,8 +1,8 @@
-"""Cross-entropy method with a diagonal Gaussian (REFERENCE §7.1, §7.2).
+"""Cross-entropy method with a diagonal Gaussian (paper Alg. 1, Alg. 4, App. 10).
 
 Each iteration draws ``samples`` candidates from ``N(mean, std²)`` (independent per element),
 clips them to the bounds, scores them with a cost function, and refits the mean and the
-**population** standard deviation (ddof 0: one elite gives std 0, not NaN; REFERENCE §8.7) of the
+**population** standard deviation (ddof 0: one elite gives std 0, not NaN; docs/architecture.md, "Planning") of the
 ``elites`` lowest-cost candidates, the clipped values being the ones scored. The best candidate seen
 in any iteration is returned. The candidates may have any shape ``(...)``, so the same functions
 serve the servo's action sequences ``(l, 2)`` and a latent CEM over keyframe latents ``(L, Zk)``:
@@ -29,7 +29,7 @@ class CEMParams:
     iterations: int = 3
     low: float | None = None
     high: float | None = None
-    min_std: float = 0.0  # std floor against premature collapse (REFERENCE §8.7); 0 = paper
+    min_std: float = 0.0  # std floor against premature collapse (docs/architecture.md, "Planning"); 0 = paper
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""What ``keyin-plan`` runs on a task: one row of the paper's Table 2 (REFERENCE §4, §7).
+"""What ``keyin-plan`` runs on a task: one row of the paper's Table 2 (paper §4.2, App. 10).
 
 A controller plays one task from its start state in the pixel-free environment and reports an
 :class:`Outcome`. Every controller gets the same low-level settings (``ServoParams``: the paper
@@ -28,7 +28,7 @@ class Outcome:
     """One task's result.
 
     Attributes:
-        final_error: shortest path around the wall from the final puck to the goal (REFERENCE §5.2).
+        final_error: shortest path around the wall from the final puck to the goal (paper §4.2).
         steps: servo steps executed.
         subgoals: subgoal images handed to the servo, the goal included (0 without a servo).
         subgoals_used: distinct subgoals the servo planned for.

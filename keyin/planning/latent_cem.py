@@ -1,9 +1,9 @@
-"""KEYIN's high-level planner: CEM over the keyframe latents (REFERENCE §7.1, paper Alg. 1 and 4).
+"""KEYIN's high-level planner: CEM over the keyframe latents (paper Alg. 1 and 4, App. 10).
 
 The candidates are z ∈ R^{L×Zk} (L = M, the model's keyframes; Zk its keyframe latent size), drawn
 from N(μ, σ²) starting at the prior N(0, I) and refit to the elites by the generic
 :func:`keyin.planning.cem.cem`. A candidate is rolled out in prior mode from the start image
-(LSTM_cond on its embedding, LSTM_key fed the given z^t; REFERENCE §2.6) and only its last keyframe is
+(LSTM_cond on its embedding, LSTM_key fed the given z^t; paper Alg. 1) and only its last keyframe is
 decoded for the cost: the pixel distance between the puck centre in K̂^L and in the goal image,
 by the colour segmentation the servo applies to subgoal images; a K̂^L without a puck costs the
 image diagonal and is counted. Nothing but z is random (eval mode; the interpolator is not used:

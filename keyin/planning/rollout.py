@@ -1,4 +1,4 @@
-"""Open-loop rollouts of candidate action sequences on copies of the pushing simulator (REFERENCE §7.2).
+"""Open-loop rollouts of candidate action sequences on copies of the pushing simulator (paper App. 10).
 
 Both simulators answer the same question: from the environment's *current* physics state, where
 does every joint end up after each of ``n`` action sequences ``(n, l, 2)``, one action held for

@@ -1,4 +1,4 @@
-"""Low-level CEM servo on the ground-truth simulator (paper App. 10 / Alg. 4, REFERENCE §7.2).
+"""Low-level CEM servo on the ground-truth simulator (paper App. 10 / Alg. 4, Table 3).
 
 Each servo step:
 
@@ -15,7 +15,7 @@ Each servo step:
    least as good by the same cost).
 
 A servo step is one *saved frame* of the dataset: the action is held for ``action_repeat = 2``
-environment steps (REFERENCE §7.2), so ``max_timesteps = 60`` servo steps are the environment's 12 s
+environment steps (docs/planning.md, "The servo"), so ``max_timesteps = 60`` servo steps are the environment's 12 s
 time limit, ``max_steps_per_subgoal = 10`` is about twice a demonstration push (4-6 saved frames),
 and a plan of ``horizon = 8`` actions looks 1.6 s ahead. Subgoal pixels come from colour
 segmentation of the subgoal images (:func:`subgoal_pixels`), as for a predicted keyframe.
@@ -114,7 +114,7 @@ class ServoTrajectory:
         reached_goal: the final puck, as the servo sees it, is within ``goal_threshold_px`` of the
             last subgoal (the servo stops as soon as it is).
         final_error: shortest path around the wall (inflated by the puck radius) from the final puck
-            to the task's goal, world units (REFERENCE §5.2).
+            to the task's goal, world units (paper §4.2).
     """
 
     puck: np.ndarray

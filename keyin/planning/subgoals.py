@@ -3,7 +3,7 @@
 A high-level planner is a callable ``(start_image, goal_image, task, rng) -> Subgoals``: (K, H, W, 3)
 uint8 intermediate subgoal images, K >= 0, in the order they are to be reached, and the planner's
 diagnostics for the task's journal line; the runner appends the goal image as the last subgoal, so
-every planner ends at the true goal (REFERENCE §7.1-7.2: No-subgoal = ``[goal]``, TAP =
+every planner ends at the true goal (paper App. 10: the true goal is the final subgoal; No-subgoal = ``[goal]``, TAP =
 ``[TAP(start, goal), goal]``, KEYIN = ``[K^1..K^L, goal]``). The learned ones are
 :mod:`keyin.planning.latent_cem` (KEYIN, Jumpy) and :mod:`keyin.planning.tap_subgoals` (TAP).
 """

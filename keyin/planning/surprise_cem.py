@@ -1,4 +1,4 @@
-"""The Surprise baseline's high-level planner (REFERENCE §4 "For planning", paper App. 9).
+"""The Surprise baseline's high-level planner (paper App. 9).
 
 A CEM over SVG-FP's per-step latents z_{1:T} ∈ R^{T×Zs} (T = the model's N future frames) rolls the
 frame predictor out from the start image, feeding each predicted embedding back as the next input,

@@ -1,4 +1,4 @@
-"""TAP's high-level planner (REFERENCE §4 "TAP details", §7.2): the subgoal TAP(start, goal); with
+"""TAP's high-level planner (paper §4.2): the subgoal TAP(start, goal); with
 ``depth`` d, recursively the subgoals between start and it and between it and the goal, 2^d − 1 in
 time order. TAP is deterministic (eval mode), so the planner draws no randomness."""
 

@@ -1,4 +1,4 @@
-"""The fixed pushing planning tasks (REFERENCE §5.2): read from the ``planning`` split, restored in
+"""The fixed pushing planning tasks (docs/planning.md): read from the ``planning`` split, restored in
 the environment.
 
 ``keyin-generate dataset=pushing 'splits={planning: 240}'`` writes them

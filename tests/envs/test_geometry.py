@@ -1,4 +1,4 @@
-"""Shortest path around the inflated wall and the camera homography (REFERENCE §5.2, §7.2)."""
+"""Shortest path around the inflated wall and the camera homography (paper §4.2, App. 10)."""
 
 import itertools
 import math

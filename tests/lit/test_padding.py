@@ -1,4 +1,4 @@
-"""Padded frames (past a clip's ``future_length``) never enter a loss or the attention (REFERENCE §3.8).
+"""Padded frames (past a clip's ``future_length``) never enter a loss or the attention (docs/architecture.md, "Padding and masking").
 
 Each test computes a loss twice on the same batch, once with the padding replaced by noise, and
 asserts the two are equal: the pushing demonstrations have clips of 26-31 frames padded to 31.

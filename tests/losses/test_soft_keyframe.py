@@ -1,4 +1,4 @@
-"""Soft keyframe loss (REFERENCE §3) against a brute-force enumeration of all offset choices."""
+"""Soft keyframe loss (paper §3.2, Alg. 2) against a brute-force enumeration of all offset choices."""
 
 import itertools
 import math
@@ -250,7 +250,7 @@ def test_gradcheck_keyin_loss():
 
 
 # --------------------------------------------------------------------------------------------
-# Invariants (REFERENCE §3.10) at the Brownian sizes M=6, S=10, N=30.
+# Invariants (docs/architecture.md, "Index conventions") at the Brownian sizes M=6, S=10, N=30.
 # --------------------------------------------------------------------------------------------
 
 
@@ -358,7 +358,7 @@ def test_one_hot_offsets_reduce_to_hard_indexing():
             + BETAS["beta_kl"] * inputs["kl_per_key"][b, t]
             for t in inside
         ) / len(inside)
-        # Hard sequence: concat_t Î^t_{0:o^t} (REFERENCE §3.9), truncated to the clip.
+        # Hard sequence: concat_t Î^t_{0:o^t} (paper §3.1), truncated to the clip.
         sequence = torch.cat([inputs["inter_frames_pred"][b, t, :offsets[b][t]]
                               for t in range(n_keys)])
         assert sequence.shape[0] >= n_future

@@ -1,4 +1,4 @@
-"""TAP's minimum-over-time loss (REFERENCE §4) on hand-made clips: the frame it picks, the frames it
+"""TAP's minimum-over-time loss (paper §4.2; docs/architecture.md, "Baselines") on hand-made clips: the frame it picks, the frames it
 may never pick, its gradient and the training pairs it is given."""
 
 import pytest

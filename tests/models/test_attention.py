@@ -1,4 +1,4 @@
-"""attention_posterior (paper eq. 1-2, REFERENCE §2.4 step 4, §8.10)."""
+"""attention_posterior (paper eq. 1-2; docs/architecture.md, "Padding and masking")."""
 
 import math
 

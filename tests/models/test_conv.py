@@ -1,4 +1,4 @@
-"""ConvEncoder / ConvDecoder (REFERENCE §2.2)."""
+"""ConvEncoder / ConvDecoder (paper §3.1, §4)."""
 
 import pytest
 import torch
@@ -123,7 +123,7 @@ def test_group_norm_groups_divide_small_widths(width):
 
 
 def test_eval_mode_single_sample_equals_batch_row():
-    """Planning runs one sample in eval mode (REFERENCE §8.3)."""
+    """Planning runs one sample in eval mode (BatchNorm on a batch of one)."""
     torch.manual_seed(0)
     encoder = ConvEncoder(32, 1, WIDTH, EMBED_DIM)
     decoder = ConvDecoder(32, 1, WIDTH, EMBED_DIM)

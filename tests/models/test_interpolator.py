@@ -1,4 +1,4 @@
-"""Interpolator and InterpolatorPosterior (REFERENCE §2.5)."""
+"""Interpolator and InterpolatorPosterior (paper §3.1-3.2)."""
 
 import pytest
 import torch

@@ -1,4 +1,4 @@
-"""KeyframePredictor and its Static / Jumpy offset modes (REFERENCE §2.4, §2.6)."""
+"""KeyframePredictor and its Static / Jumpy offset modes (paper §3.1, §4 "Baselines")."""
 
 import pytest
 import torch

@@ -1,4 +1,4 @@
-"""LSTMBlock, MLP, state_from_vector (REFERENCE §2.3)."""
+"""LSTMBlock, MLP, state_from_vector (paper §4)."""
 
 import pytest
 import torch

@@ -10,11 +10,11 @@ PY=${PY:-/work/main/.venv/bin/python}
 for width in 8 16; do
   date; $PY -m keyin.cli.train model=frame_autoencoder dataset=pushing backbone=ours seed=0 scale.conv_width=$width \
     scale.frames_steps=2000 trainer.enable_progress_bar=false hydra.run.dir=runs/frames/pushing_w$width
-  $PY benchmarks/stage1_objects.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val --clips 200 \
-    > benchmarks/results/stage1_objects_frames_w$width.md
+  $PY studies/stage1_objects.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val --clips 200 \
+    > studies/results/stage1_objects_frames_w$width.md
   $PY benchmarks/encode_split.py runs/frames/pushing_w$width/checkpoints/frames/last.ckpt --split val \
     > benchmarks/results/encode_split_frames_w$width.md
 done
-$PY benchmarks/stage1_objects.py docs/results/pushing_table2/models/keyin_plus_seed1.ckpt --split val --clips 200 \
-  > benchmarks/results/stage1_objects_keyin_plus_seed1.md
+$PY studies/stage1_objects.py models/pushing_table2/keyin_plus_seed1.ckpt --split val --clips 200 \
+  > studies/results/stage1_objects_keyin_plus_seed1.md
 date

@@ -10,7 +10,7 @@ RUN=runs/frames_stage1/pushing_irregular
   backbone.frames_ckpt=$AE stage=interpolator hydra.run.dir=$RUN
 /usr/bin/time -f "gate irregular %e s" $PY -m keyin.cli.eval ckpt=$RUN/checkpoints/interpolator/last.ckpt dataset=pushing_irregular \
   split=val clips=200 progress=false hydra.run.dir=runs/frames_stage1/gate_pushing_irregular
-$PY benchmarks/stage1_objects.py $RUN/checkpoints/interpolator/last.ckpt --split val --clips 200 > runs/frames_stage1/objects_pushing_irregular.md
+$PY studies/stage1_objects.py $RUN/checkpoints/interpolator/last.ckpt --split val --clips 200 > runs/frames_stage1/objects_pushing_irregular.md
 for m in constant random; do
   $PY -m keyin.cli.eval model=$m dataset=pushing_irregular split=val clips=200 progress=false hydra.run.dir=runs/frames_stage1/${m}_pushing_irregular_val
 done

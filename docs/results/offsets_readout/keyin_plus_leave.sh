@@ -3,7 +3,7 @@
 # Issue 26 item 2: keyin_plus whose teacher also teaches the keyframe after the last interior one to
 # leave the clip (keyin 0.2, run-tree3 = main at the commit of that change); stage 2 only on the Brownian
 # Table 1 sweep's stage 1 of seed 0; $1 = extra overrides' label, rest = overrides. No test scoring
-# (measured on validation clips by benchmarks/readout_chain.py).
+# (measured on validation clips by studies/readout_chain.py).
 cd /work/run-tree3
 export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 NAME=$1; shift

@@ -7,5 +7,5 @@ cd /work/run-tree3 && PYTHONPATH=/work/run-tree3 /work/main/.venv/bin/python -m 
 cd /work/main
 ARGS=""
 for d in $G/*/; do a=$(basename $d); [ -f $d/metrics.json ] && ARGS="$ARGS $a=$d"; done
-.venv/bin/python benchmarks/training_curves.py $ARGS --out $OUT/curves.png --table $OUT/validation.csv > /dev/null
-.venv/bin/python benchmarks/stage2_grid.py $OUT --out $OUT/grid.md
+.venv/bin/python studies/training_curves.py $ARGS --out $OUT/curves.png --table $OUT/validation.csv > /dev/null
+.venv/bin/python studies/stage2_grid.py $OUT --out $OUT/grid.md

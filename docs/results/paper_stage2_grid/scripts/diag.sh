@@ -7,5 +7,5 @@ mkdir -p $D
 for m in $G/*/metrics.json; do
   arm=$(basename $(dirname $m))
   [ -f $D/$arm.md ] && continue
-  cd /work/main && .venv/bin/python benchmarks/stage2_diagnostics.py $G/$arm/checkpoints/keyframes/last.ckpt --clips 200 --data-dir /work/run-tree/data --out $D/$arm.md > /dev/null 2>&1 && echo "$arm diagnosed"
+  cd /work/main && .venv/bin/python studies/stage2_diagnostics.py $G/$arm/checkpoints/keyframes/last.ckpt --clips 200 --data-dir /work/run-tree/data --out $D/$arm.md > /dev/null 2>&1 && echo "$arm diagnosed"
 done

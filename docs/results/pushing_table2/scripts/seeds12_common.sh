@@ -3,8 +3,8 @@ cd /work/run-tree11
 export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 MUJOCO_GL=egl
 PY=/work/main/.venv/bin/python
 T1=runs/multirun/pushing_table1
-MODELS=docs/results/pushing_table2/models
-CKPT='planner.checkpoint=docs/results/pushing_table2/models/${planner.model}_seed${planner.model_seed}.ckpt'
+MODELS=models/pushing_table2
+CKPT='planner.checkpoint=models/pushing_table2/${planner.model}_seed${planner.model_seed}.ckpt'
 wait_for() { while [ ! -f "$1" ]; do sleep 30; done; }
 train() {  # train <model> <seed>: pushing Table 1's job, then slim its stage 2 into $MODELS
   date; [ -f $T1/$1_seed$2/metrics.json ] || $PY -m keyin.cli.train -m experiment=pushing_table1 model=$1 seed=$2 trainer.enable_progress_bar=false

@@ -13,6 +13,6 @@ done
 cd /work/main
 for run in /work/run-tree/runs/tap/before_seed0 /work/run-tree4/runs/tap/after_seed0 /work/run-tree4/runs/tap/after_seed1 /work/run-tree4/runs/tap/after_seed2; do
   name=$(basename $(dirname $(dirname $run)))_$(basename $run)
-  $PY benchmarks/tap_landing.py $run/checkpoints/tap/last.ckpt --split test --clips 1000 --data-dir /work/run-tree/data \
-    --out benchmarks/results/tap_landing_$(basename $run).md
+  $PY studies/tap_landing.py $run/checkpoints/tap/last.ckpt --split test --clips 1000 --data-dir /work/run-tree/data \
+    --out studies/results/tap_landing_$(basename $run).md
 done
