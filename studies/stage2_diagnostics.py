@@ -36,7 +36,7 @@ from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
 from keyin.decode.offsets import offset_keyframes  # noqa: E402
 from keyin.decode.segmentation import segmentation_offsets  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
-from keyin.lit.registry import load_trained_module  # noqa: E402
+from keyin.lit.registry import load_training_module  # noqa: E402
 from keyin.losses.image import future_pixel_weights  # noqa: E402
 from keyin.losses.soft_keyframe import interpolation_loss, offset_entropy  # noqa: E402
 from keyin.models.distributions import gaussian_kl  # noqa: E402
@@ -129,7 +129,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     torch.manual_seed(args.seed)
-    module, config = load_trained_module(args.ckpt)
+    module, config = load_training_module(args.ckpt)
     dataset, batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
     constant = args.constant or dataset.tuned.constant_offset
     started = time.perf_counter()

@@ -13,6 +13,9 @@ validation clips and logs each term of the loss there. The arms change one chann
 - ``mean``: z at its posterior mean (no sampling noise in δ and K̂);
 - ``tied_mean``: z at its mean and K̂ replaced by its soft target K̃^e(δ) (the keyframes follow δ exactly;
   L_ke = 0), so δ is the only thing that moves the interpolation;
+- ``tied_interpolator``: z sampled; the interpolator reads K̃^e(δ) (the embeddings of the frames δ points at)
+  instead of the predicted K̂, which L_ke still trains (the prior's keyframes for planning stay learned);
+- ``beta_ke100`` / ``beta_ke1000``: the paper's loss with β_ke = 100 / 1000 (K̂ held to its frames harder);
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
   weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import dataclass
 import sys
 import time
 from datetime import date
@@ -38,20 +42,32 @@ from paper_loss_truth import Clips, Reading, interpolation_term  # noqa: E402
 
 from keyin.data.datamodule import split_clips  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
-from keyin.lit.registry import load_trained_module  # noqa: E402
-from keyin.lit.modes import evaluating  # noqa: E402
+from keyin.lit.registry import load_training_module  # noqa: E402
+from keyin.models.modes import evaluating  # noqa: E402
 from keyin.losses.soft_keyframe import offset_entropy, soft_keyframe_targets  # noqa: E402
 from keyin.models.keyin import interpolator_offsets  # noqa: E402
 from keyin.models.positions import position_distributions  # noqa: E402
 from hydra.utils import instantiate  # noqa: E402
 
-ARMS = {  # name: (sample z, tie K̂ to K̃^e(δ), learning rate, L_inter of the expected error)
-    "sampled": (True, False, 1e-3, False),
-    "mean": (False, False, 1e-3, False),
-    "tied_mean": (False, True, 1e-3, False),
-    "sampled_lr1e-4": (True, False, 1e-4, False),
-    "mean_lr1e-4": (False, False, 1e-4, False),
-    "expected": (True, False, 1e-3, True),
+@dataclass(frozen=True)
+class Arm:
+    sample: bool = True  # z drawn from the posterior (False: its mean)
+    tie: str = "none"  # none | interpolator: it reads K̃^e(δ), L_ke still trains K̂ | all: K̂ := K̃^e(δ), L_ke = 0
+    lr: float = 1e-3
+    expected: bool = False  # L_inter as the expected BCE over where each frame lands
+    beta_ke: float | None = None  # None: the checkpoint's β_ke (1)
+
+
+ARMS = {
+    "sampled": Arm(),
+    "mean": Arm(sample=False),
+    "tied_mean": Arm(sample=False, tie="all"),
+    "tied_interpolator": Arm(tie="interpolator"),
+    "sampled_lr1e-4": Arm(lr=1e-4),
+    "mean_lr1e-4": Arm(sample=False, lr=1e-4),
+    "expected": Arm(expected=True),
+    "beta_ke100": Arm(beta_ke=100.0),
+    "beta_ke1000": Arm(beta_ke=1000.0),
 }
 EXPECTED = Reading("expected_bce", "Σ δ̃ BCE(I_j, Î_i)", mixture="expected")
 
@@ -72,30 +88,31 @@ def arm_loss(module, clips: torch.Tensor, lengths: torch.Tensor, out: dict, expe
     return terms
 
 
-def forward(module, clips: torch.Tensor, lengths: torch.Tensor, sample: bool, tied: bool) -> dict:
-    """The posterior forward of ``KEYIN.forward``, with the latents' mean when not ``sample`` and K̂
-    replaced by K̃^e(δ) when ``tied``."""
+def forward(module, clips: torch.Tensor, lengths: torch.Tensor, arm: Arm) -> dict:
+    """The posterior forward of ``KEYIN.forward``, with the latents' mean when not ``arm.sample`` and the
+    interpolator reading K̃^e(δ) where ``arm.tie`` says so."""
     model = module.model
-    out = model(clips, lengths, sample=sample)
-    if tied:
+    out = model(clips, lengths, sample=arm.sample)
+    if arm.tie != "none":
         keyframe_pos, _ = position_distributions(out["offset_probs"])
-        key_emb = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
-        out["key_emb"] = key_emb
-        out["frames"] = model.interpolate(out["boundary_emb"][:, 0], key_emb,
+        targets = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
+        if arm.tie == "all":
+            out["key_emb"] = targets
+        out["frames"] = model.interpolate(out["boundary_emb"][:, 0], targets,
                                           interpolator_offsets(out["offset_probs"], model.delta_input))
     return out
 
 
 @torch.no_grad()
-def validate(module, batch: dict, sample: bool, tied: bool, expected: bool) -> dict[str, float]:
+def validate(module, batch: dict, arm: Arm) -> dict[str, float]:
     """Argmax-offset F1 (keyin-eval's ``offsets``) and the loss terms on the validation batch."""
     clips, lengths = batch["frames"], batch["future_length"]
     found = module.discover(clips, lengths, "offsets")
     scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
     with evaluating(module):
         torch.manual_seed(0)
-        out = forward(module, clips, lengths, sample, tied)
-        terms = arm_loss(module, clips, lengths, out, expected)
+        out = forward(module, clips, lengths, arm)
+        terms = arm_loss(module, clips, lengths, out, arm.expected)
     return {
         "f1": scores["f1"], "keys": scores["n_predicted"], "patterns": float(len({tuple(row) for row in found})),
         "loss": terms["loss"].item(), "inter": terms["inter"].item(), "key_emb": terms["key_emb"].item(),
@@ -105,26 +122,28 @@ def validate(module, batch: dict, sample: bool, tied: bool, expected: bool) -> d
 
 
 def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int) -> list[dict]:
-    sample, tied, lr, expected = ARMS[arm]
-    module, _ = load_trained_module(ckpt)
+    spec = ARMS[arm]
+    module, _ = load_training_module(ckpt)
+    if spec.beta_ke is not None:
+        module.hparams.beta_ke = spec.beta_ke
     module.train()
     trainable = [p for p in module.parameters() if p.requires_grad]
-    optimizer = torch.optim.Adam(trainable, lr=lr, betas=(0.9, 0.999))
+    optimizer = torch.optim.Adam(trainable, lr=spec.lr, betas=(0.9, 0.999))
     generator = torch.Generator().manual_seed(seed)
     loader = iter(DataLoader(train, batch_size=batch_size, shuffle=True, generator=generator, drop_last=True))
     torch.manual_seed(seed)
-    rows = [{"step": 0, **validate(module, val_batch, sample, tied, expected)}]
+    rows = [{"step": 0, **validate(module, val_batch, spec)}]
     print(arm, rows[-1], flush=True)
     for step in range(1, steps + 1):
         batch = next(loader)
         module.train()
-        out = forward(module, batch["frames"], batch["future_length"], sample, tied)
-        loss = arm_loss(module, batch["frames"], batch["future_length"], out, expected)["loss"]
+        out = forward(module, batch["frames"], batch["future_length"], spec)
+        loss = arm_loss(module, batch["frames"], batch["future_length"], out, spec.expected)["loss"]
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
         if step % every == 0:
-            rows.append({"step": step, **validate(module, val_batch, sample, tied, expected)})
+            rows.append({"step": step, **validate(module, val_batch, spec)})
             print(arm, rows[-1], flush=True)
     return rows
 
@@ -139,7 +158,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
-    module, config = load_trained_module(args.ckpt)
+    module, config = load_training_module(args.ckpt)
     dataset, val_batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
     train = split_clips(dataset, instantiate(dataset.generator), "train", 100_000, args.data_dir)
     started = time.perf_counter()

@@ -34,6 +34,14 @@ def stage_class(stage: str) -> type[nn.Module]:
     return getattr(importlib.import_module(module), name)
 
 
+def run_config(checkpoint: dict[str, Any]) -> dict[str, Any]:
+    """The run config stored in a checkpoint, its ``model.name`` in this version's names."""
+    config = dict(checkpoint[CONFIG_KEY])
+    if "model" in config:
+        config["model"] = dict(config["model"], name=saved_model_name(checkpoint))
+    return config
+
+
 def load_trained_module(
     path: str | Path, stage: str | None = "keyframes", device: torch.device | str = "cpu"
 ) -> tuple[nn.Module, dict[str, Any]]:
@@ -47,7 +55,14 @@ def load_trained_module(
     checkpoint = load_checkpoint(path, stage)
     module = stage_class(checkpoint[STAGE_KEY])(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
-    config = dict(checkpoint[CONFIG_KEY])
-    if "model" in config:
-        config["model"] = dict(config["model"], name=saved_model_name(checkpoint))
-    return module.to(device).eval(), config
+    return module.to(device).eval(), run_config(checkpoint)
+
+
+def load_training_module(path: str | Path, stage: str | None = "keyframes") -> tuple[nn.Module, dict[str, Any]]:
+    """As :func:`load_trained_module`, but as the LightningModule that trains the stage (a stage 2's
+    ``soft_loss`` included), in train mode on the CPU: to train on from a checkpoint, or study its loss."""
+    checkpoint = load_checkpoint(path, stage)
+    module_name, name = STAGES[checkpoint[STAGE_KEY]].split(":")
+    module = getattr(importlib.import_module(module_name), name)(**checkpoint["hyper_parameters"])
+    module.load_state_dict(checkpoint["state_dict"])
+    return module, run_config(checkpoint)
