@@ -41,4 +41,5 @@ shoot() {  # shoot <page, with its query> <file>
   echo "wrote $OUT/$2"
 }
 shoot '#hparams' dashboard_hparams.png
-shoot '?tagFilter=%5E(train%2Floss%7Cval%2Ff1%7Cstage1%2Ftrain%2Floss)%24#timeseries' dashboard_scalars.png  # ^(train/loss|val/f1|stage1/train/loss)$
+# the Scalars page (the Time Series page drew the loss cards empty in headless Chromium, 2026-12-06)
+shoot '#scalars&tagFilter=%5E(train%2Floss%7Cval%2Ff1%7Cstage1%2Ftrain%2Floss)%24' dashboard_scalars.png  # ^(train/loss|val/f1|stage1/train/loss)$
