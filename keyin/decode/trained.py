@@ -28,6 +28,7 @@ from keyin.models.keyin import stage1_networks
 INFERENCE_DEFAULTS: dict[str, Any] = {
     "offset_evidence": False, "discovery": "offsets", "map_keyframe_cost": 120.0, "map_boundary_weight": 10.0,
     "map_candidate_logit": MAP_CANDIDATE_LOGIT, "delta_input": "soft", "gumbel_offsets": False,
+    "interpolate_from": "predicted",
 }
 
 
@@ -42,7 +43,7 @@ def keyin_model(hparams: Mapping[str, Any]) -> KEYIN:
         fixed_offset=hparams["fixed_offset"], offset_evidence=hparams["offset_evidence"],
     )
     return KEYIN(encoder, decoder, interpolator, predictor, stage1["n_cond"], delta_input=hparams["delta_input"],
-                 gumbel_offsets=hparams["gumbel_offsets"])
+                 gumbel_offsets=hparams["gumbel_offsets"], interpolate_from=hparams["interpolate_from"])
 
 
 class Hyperparameters(dict):

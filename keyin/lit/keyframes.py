@@ -70,6 +70,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         entropy_bonus_steps: int = 0,
         gumbel_offsets: bool = False,  # an aid the paper does not have (models/keyin.py)
         frozen: str = "stage1",  # which stage-1 networks stage 2 freezes (models/keyin.py FROZEN_IN_STAGE2)
+        interpolate_from: str = "predicted",  # ours: "frames" (models/keyin.py INTERPOLATE_FROM)
     ) -> None:
         super().__init__()
         if discovery not in KEYIN_RULES:

@@ -13,7 +13,9 @@ from torch import Tensor
 
 from keyin.precision import in_float32
 from keyin.models.distributions import gaussian_kl
-from keyin.models.positions import PROB_EPS, future_window, position_distributions, soft_frames, valid_frame_mask
+from keyin.models.positions import (  # noqa: F401  (soft_keyframe_targets: imported from here too)
+    PROB_EPS, position_distributions, soft_frames, soft_keyframe_targets, valid_frame_mask,
+)
 
 IGNORE_OFFSET = -100
 """A keyframe without a teacher offset (``cross_entropy``'s ignore index)."""
@@ -23,12 +25,6 @@ not say; docs/decisions.md): "sum" BCE summed over pixels and frames, ``ℓ_ke``
 ``ℓ_KL`` over latent dims; "per_frame" ``L_inter`` averaged over the clip's valid frames instead (the
 keyframe terms are already averaged over keyframes); "per_pixel" every term a mean per scalar: BCE over
 pixels and frames, ``ℓ_ke`` over embedding dims, ``ℓ_KL`` over latent dims."""
-
-
-def _inside_keyframe_pos(keyframe_pos: Tensor, lengths: Tensor, n_future: int) -> Tensor:
-    """``D^t`` on positions 0 ... n_b - 1: (B, M, L_ext) → (B, M, N) (paper Alg. 2)."""
-    frame_mask = valid_frame_mask(lengths, n_future)
-    return future_window(keyframe_pos, n_future) * frame_mask[:, None, :]
 
 
 def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:
@@ -42,32 +38,6 @@ def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:
     """
     future_pos = keyframe_pos[..., 1:]  # drop k = 0 (K^0): positions 0 ... M*S-1
     return (future_pos * valid_frame_mask(lengths, future_pos.shape[-1])[:, None, :]).sum(-1)
-
-
-def soft_keyframe_targets(
-    keyframe_pos: Tensor, lengths: Tensor, future: Tensor, normalize: bool
-) -> Tensor:
-    """Expected ground-truth keyframes ``K̃^t = Σ_{j<n_b} D^t[j+1] future_j`` (paper §3.2, Alg. 2).
-
-    Args:
-        keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
-        lengths: (B,) int, valid future frames n_b.
-        future: (B, N, D) future-frame embeddings or flattened images; entries at positions
-            >= n_b are ignored (they may hold anything, NaN included).
-        normalize: divide by ``max(c^t, 1e-6)`` (expectation given "inside"; our default) instead
-            of the paper's unnormalised sum.
-    Returns:
-        (B, M, D) soft targets.
-    """
-    n_future = future.shape[1]
-    inside_pos = _inside_keyframe_pos(keyframe_pos, lengths, n_future)
-    frame_mask = valid_frame_mask(lengths, n_future)
-    # A fill, not a product: 0 * NaN padding would still be NaN.
-    future = future.masked_fill(~frame_mask[..., None], 0.0)
-    targets = torch.bmm(inside_pos, future)
-    if normalize:
-        targets = targets / inside_pos.sum(-1, keepdim=True).clamp_min(PROB_EPS)
-    return targets
 
 
 def bce_sum(

@@ -17,7 +17,7 @@ from torch import Tensor, nn
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
-from keyin.models.positions import argmax_frames
+from keyin.models.positions import argmax_frames, position_distributions, soft_keyframe_targets
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
 # What stage 2 freezes (an open choice: the paper writes "we freeze LSTM_inter weights and only use it to
@@ -32,6 +32,11 @@ FROZEN_IN_STAGE2 = {
 # (δ̂^t, "hat" = argmax) and as stage 1 trained on, "straight_through" that one-hot forward and δ^t's
 # gradient backward.
 DELTA_INPUTS = ("soft", "argmax", "straight_through")
+# Which keyframe embeddings the interpolator reads in the posterior forward (stage 2 and discovery): the
+# predicted K̂^{e,t} (the paper's) or K̃^{e,t}(δ), the embeddings of the frames δ puts the keyframes at (ours:
+# the predictor cannot then re-code a segment in K̂ and walk away from the true keyframes; docs/decisions.md,
+# "Which term of the paper's loss walks away from the true keyframes"). The prior forward always reads K̂.
+INTERPOLATE_FROM = ("predicted", "frames")
 
 
 def interpolator_offsets(offset_probs: Tensor, delta_input: str) -> Tensor:
@@ -76,6 +81,7 @@ class KEYIN(nn.Module):
         gumbel_offsets: (an aid the paper does not have) in training, the posterior forward's δ is a
             straight-through Gumbel-softmax sample of the offset logits: one-hot forward, so the soft
             loss scores one sampled segmentation per clip, and the relaxed sample's gradient backward.
+        interpolate_from: what the posterior forward's interpolator reads as keyframes (:data:`INTERPOLATE_FROM`).
     """
 
     def __init__(
@@ -87,14 +93,18 @@ class KEYIN(nn.Module):
         n_cond: int,
         delta_input: str = "soft",
         gumbel_offsets: bool = False,
+        interpolate_from: str = "predicted",
     ) -> None:
         super().__init__()
         if delta_input not in DELTA_INPUTS:
             raise ValueError(f"delta_input must be one of {DELTA_INPUTS}, got {delta_input!r}")
+        if interpolate_from not in INTERPOLATE_FROM:
+            raise ValueError(f"interpolate_from must be one of {INTERPOLATE_FROM}, got {interpolate_from!r}")
         self.encoder, self.decoder, self.interpolator, self.predictor = encoder, decoder, interpolator, predictor
         self.n_cond = n_cond
         self.delta_input = delta_input
         self.gumbel_offsets = gumbel_offsets
+        self.interpolate_from = interpolate_from
 
     def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
         """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""
@@ -140,8 +150,12 @@ class KEYIN(nn.Module):
         embeddings, keys = self.keyframes(clips, future_length, mode, sample)
         if self.gumbel_offsets and self.training and mode == "posterior":
             keys = keys._replace(offset_probs=F.gumbel_softmax(keys.offset_logits, hard=True))
+        key_emb = keys.key_emb
+        if self.interpolate_from == "frames" and mode == "posterior":
+            keyframe_pos, _ = position_distributions(keys.offset_probs)
+            key_emb = soft_keyframe_targets(keyframe_pos, future_length, embeddings[:, self.n_cond :], normalize=True)
         frames = self.interpolate(
-            embeddings[:, self.n_cond - 1], keys.key_emb, interpolator_offsets(keys.offset_probs, self.delta_input)
+            embeddings[:, self.n_cond - 1], key_emb, interpolator_offsets(keys.offset_probs, self.delta_input)
         )
         return {
             "key_emb": keys.key_emb,

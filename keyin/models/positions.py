@@ -90,6 +90,38 @@ def valid_frame_mask(lengths: Tensor, n_future: int) -> Tensor:
     return positions < lengths[:, None]
 
 
+def _inside_keyframe_pos(keyframe_pos: Tensor, lengths: Tensor, n_future: int) -> Tensor:
+    """``D^t`` on positions 0 ... n_b - 1: (B, M, L_ext) → (B, M, N) (paper Alg. 2)."""
+    frame_mask = valid_frame_mask(lengths, n_future)
+    return future_window(keyframe_pos, n_future) * frame_mask[:, None, :]
+
+
+def soft_keyframe_targets(
+    keyframe_pos: Tensor, lengths: Tensor, future: Tensor, normalize: bool
+) -> Tensor:
+    """Expected ground-truth keyframes ``K̃^t = Σ_{j<n_b} D^t[j+1] future_j`` (paper §3.2, Alg. 2).
+
+    Args:
+        keyframe_pos: (B, M, L_ext) from :func:`position_distributions`.
+        lengths: (B,) int, valid future frames n_b.
+        future: (B, N, D) future-frame embeddings or flattened images; entries at positions
+            >= n_b are ignored (they may hold anything, NaN included).
+        normalize: divide by ``max(c^t, 1e-6)`` (expectation given "inside"; our default) instead
+            of the paper's unnormalised sum.
+    Returns:
+        (B, M, D) soft targets.
+    """
+    n_future = future.shape[1]
+    inside_pos = _inside_keyframe_pos(keyframe_pos, lengths, n_future)
+    frame_mask = valid_frame_mask(lengths, n_future)
+    # A fill, not a product: 0 * NaN padding would still be NaN.
+    future = future.masked_fill(~frame_mask[..., None], 0.0)
+    targets = torch.bmm(inside_pos, future)
+    if normalize:
+        targets = targets / inside_pos.sum(-1, keepdim=True).clamp_min(PROB_EPS)
+    return targets
+
+
 def soft_frames(
     frame_pos: Tensor, predicted: Tensor, n_future: int, eps: float = PROB_EPS
 ) -> tuple[Tensor, Tensor]:

@@ -2,6 +2,7 @@
 agree — the posterior forward's keyframes are the predictor's, the argmax video is made of the
 frames it interpolated, and planning's keyframe images are the decoded prior keyframes of z."""
 
+import pytest
 import torch
 
 from keyin.decode.offsets import offset_keyframes
@@ -66,3 +67,29 @@ def test_the_segmentation_rule_is_map_without_stage_2s_scores():
         assert segmentation == keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=0.0)
         # the test's premise: at this weight the (non-zero) scores change the map keyframes
         assert keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=1e3) != segmentation
+
+
+def test_interpolating_from_the_frames_reads_the_embeddings_delta_selects_and_leaves_the_prior_as_it_was():
+    """interpolate_from="frames" (ours): the posterior forward's interpolator reads K̃^e(δ), the δ-weighted
+    embeddings of the clip's frames, so L_inter reaches δ but not the keyframe-embedding head; the prior
+    forward (no frames to read) keeps reading the predicted K̂."""
+    from keyin.models.positions import position_distributions, soft_keyframe_targets
+
+    keyin, data = model(), batch()
+    keyin.interpolate_from = "frames"
+    clips, lengths = data["frames"], data["future_length"]
+    out = keyin(clips, lengths, mode="posterior", sample=False)
+    keyframe_pos, _ = position_distributions(out["offset_probs"])
+    targets = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
+    expected = keyin.interpolate(out["boundary_emb"][:, 0], targets, out["offset_probs"])
+    torch.testing.assert_close(out["frames"], expected)
+    grads = torch.autograd.grad(out["frames"].sum(), [out["offset_logits"], out["key_emb"]], allow_unused=True)
+    assert grads[0] is not None and grads[0].abs().sum() > 0  # δ still learns from the interpolation
+    assert grads[1] is None  # K̂ does not reach it: only L_ke trains the keyframe embeddings
+    torch.manual_seed(0)
+    prior_frames = keyin(clips, lengths, mode="prior", sample=False)
+    torch.manual_seed(0)
+    keyin.interpolate_from = "predicted"
+    torch.testing.assert_close(prior_frames["frames"], keyin(clips, lengths, mode="prior", sample=False)["frames"])
+    with pytest.raises(ValueError, match=r"interpolate_from must be one of \('predicted', 'frames'\)"):
+        KEYIN(keyin.encoder, keyin.decoder, keyin.interpolator, keyin.predictor, 2, interpolate_from="targets")
