@@ -52,7 +52,8 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
 ADDED_SINCE = {
     "keyframes": {"teacher_chain": False, "teacher_leaves": False, "delta_input": "soft", "loss_reduction": "sum",
                   "frozen": "stage1", "entropy_bonus": 0.0, "entropy_bonus_steps": 0, "gumbel_offsets": False,
-                  "map_candidate_logit": -4.0},  # read only by discovery=map_pruned (added 2026-12-06)
+                  "map_candidate_logit": -4.0,  # read only by discovery=map_pruned (added 2026-12-06)
+                  "interpolate_from": "predicted"},  # ours, issue 62 (added 2026-12-06)
     "interpolator": {"frozen_frames": False},
 }
 # Classes that moved since keyin 0.1, old path → new path.
