@@ -16,6 +16,9 @@ validation clips and logs each term of the loss there. The arms change one chann
 - ``tied_interpolator``: z sampled; the interpolator reads K̃^e(δ) (the embeddings of the frames δ points at)
   instead of the predicted K̂, which L_ke still trains (the prior's keyframes for planning stay learned);
 - ``beta_ke100`` / ``beta_ke1000``: the paper's loss with β_ke = 100 / 1000 (K̂ held to its frames harder);
+- ``scratch_*``: not a warm start: a fresh keyin_paper predictor on the checkpoint's stage 1, the interpolator reading
+  K̃^e(δ), with aids that keep δ from saturating: the offset head initialised to zero (``_uniform``), its logits' temperature
+  annealed from 10 to 1 over 1000 steps (``_anneal``), its learning rate a tenth of the rest's (``_slow``);
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
   weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
@@ -56,6 +59,13 @@ class Arm:
     lr: float = 1e-3
     expected: bool = False  # L_inter as the expected BCE over where each frame lands
     beta_ke: float | None = None  # None: the checkpoint's β_ke (1)
+    # from scratch: a fresh keyin_paper predictor (backbone=ours, scale=cpu) on the checkpoint's stage 1, and aids against
+    # δ saturating before the clips' information reaches it (issue 62, item 3)
+    scratch: bool = False
+    uniform_init: bool = False  # the offset head starts at zero: δ uniform for every clip
+    temperature: float = 1.0  # offset logits divided by T, annealed linearly from this to 1 over anneal_steps
+    anneal_steps: int = 1000
+    offset_lr_scale: float = 1.0  # the offset head's learning rate, a fraction of the rest's
 
 
 ARMS = {
@@ -68,7 +78,31 @@ ARMS = {
     "expected": Arm(expected=True),
     "beta_ke100": Arm(beta_ke=100.0),
     "beta_ke1000": Arm(beta_ke=1000.0),
+    "scratch_frames": Arm(scratch=True, tie="interpolator"),
+    "scratch_frames_uniform": Arm(scratch=True, tie="interpolator", uniform_init=True),
+    "scratch_frames_anneal": Arm(scratch=True, tie="interpolator", uniform_init=True, temperature=10.0),
+    "scratch_frames_slow": Arm(scratch=True, tie="interpolator", uniform_init=True, offset_lr_scale=0.1),
 }
+
+
+def scratch_module(ckpt: str):
+    """A fresh stage 2 of the paper's KEYIN (``model=keyin_paper backbone=ours scale=cpu``) on ``ckpt``'s stage 1."""
+    from hydra import compose, initialize_config_module
+
+    from keyin.checkpoints import load_stage1
+    from keyin.cli.app import CONFIG_MODULE
+
+    stage1 = load_stage1(ckpt)
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        cfg = compose("train", overrides=["model=keyin_paper", "backbone=ours", "scale=cpu"])
+    module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
+    module.load_stage1(stage1["state_dict"])
+    return module
+
+
+def temperature_at(arm: Arm, step: int) -> float:
+    """The offset logits' temperature at ``step``: ``arm.temperature`` falling linearly to 1."""
+    return 1.0 + (arm.temperature - 1.0) * max(0.0, 1.0 - step / arm.anneal_steps)
 EXPECTED = Reading("expected_bce", "Σ δ̃ BCE(I_j, Î_i)", mixture="expected")
 
 
@@ -123,18 +157,30 @@ def validate(module, batch: dict, arm: Arm) -> dict[str, float]:
 
 def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int) -> list[dict]:
     spec = ARMS[arm]
-    module, _ = load_training_module(ckpt)
+    torch.manual_seed(seed)
+    module = scratch_module(ckpt) if spec.scratch else load_training_module(ckpt)[0]
     if spec.beta_ke is not None:
         module.hparams.beta_ke = spec.beta_ke
+    head = module.model.predictor.offset_head
+    if spec.uniform_init:
+        torch.nn.init.zeros_(head.weight)
+        torch.nn.init.zeros_(head.bias)
+    temperature = [temperature_at(spec, 0)]
+    head.register_forward_hook(lambda _module, _inputs, logits: logits / temperature[0])
     module.train()
+    head_params = {id(p) for p in head.parameters()}
     trainable = [p for p in module.parameters() if p.requires_grad]
-    optimizer = torch.optim.Adam(trainable, lr=spec.lr, betas=(0.9, 0.999))
+    optimizer = torch.optim.Adam([
+        {"params": [p for p in trainable if id(p) not in head_params]},
+        {"params": [p for p in trainable if id(p) in head_params], "lr": spec.lr * spec.offset_lr_scale},
+    ], lr=spec.lr, betas=(0.9, 0.999))
     generator = torch.Generator().manual_seed(seed)
     loader = iter(DataLoader(train, batch_size=batch_size, shuffle=True, generator=generator, drop_last=True))
     torch.manual_seed(seed)
     rows = [{"step": 0, **validate(module, val_batch, spec)}]
     print(arm, rows[-1], flush=True)
     for step in range(1, steps + 1):
+        temperature[0] = temperature_at(spec, step)
         batch = next(loader)
         module.train()
         out = forward(module, batch["frames"], batch["future_length"], spec)
