@@ -119,12 +119,18 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
 
     def soft_loss(self, clips: torch.Tensor, future_length: torch.Tensor, out: dict[str, torch.Tensor | None]) -> dict[str, torch.Tensor]:
         """The paper's loss (:func:`keyin.losses.soft_keyframe.keyin_loss`) of a posterior forward ``out``
-        of (B, L, C, H, W) ``clips``, with this module's weights and reduction."""
+        of (B, L, C, H, W) ``clips``, with this module's weights and reduction; with ``beta_ki > 0`` eq. 3's
+        image term scores the decoded keyframes ``sigmoid(CNN_dec(K̂^{e,t}))`` against the soft targets K̃^t."""
         hp, n_cond = self.hparams, self.model.n_cond
+        key_frames = None
+        if hp.beta_ki > 0:
+            # float32, as the interpolated frames: these probabilities meet the loss's logs
+            key_frames = torch.sigmoid(self.model.decoder(out["key_emb"]).float()).flatten(2)  # (B, M, C·H·W)
         return keyin_loss(
             out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
             gaussian_kl(out["mu"], out["log_sigma"]), future_length, hp.beta_ke, hp.beta_ki, hp.beta_kl,
-            hp.normalize_key_targets, pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
+            hp.normalize_key_targets, key_frames_pred=key_frames,
+            pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
             reduction=hp.loss_reduction, latent_dim=hp.latent_dim,
         )
 

@@ -21,7 +21,7 @@ def module(**options) -> KeyframeModule:
     stage1 = dict(InterpolatorModule(**{**STAGE1, "latent_dim": options.pop("inter_latent", 0)}).hparams)
     built = KeyframeModule(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
-        offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
+        offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=options.pop("beta_ki", 0.0), beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, **options,
     )
     built.log = built.log_dict = lambda *args, **kwargs: None  # no trainer attached
@@ -183,3 +183,33 @@ def test_gumbel_offsets_sample_one_hot_offsets_in_training_and_keep_the_softmax_
     with torch.no_grad():
         evaluated = model.eval()(data["frames"], data["future_length"], sample=False)
     torch.testing.assert_close(evaluated["offset_probs"], torch.softmax(evaluated["offset_logits"], -1))
+
+
+def test_the_keyframe_image_term_scores_the_decoded_keyframes_against_the_soft_target_images():
+    """β_ki > 0 (eq. 3's image term, 0 in the paper's runs): the loss grows by β_ki times the c-weighted mean
+    BCE of sigmoid(CNN_dec(K̂^{e,t})) against K̃^t = Σ_j δ̃^t_j I_j / c^t, computed here clip by clip and
+    keyframe by keyframe; the decoder stays frozen and the keyframe embeddings get the gradient."""
+    plain, imaged = module(), module(beta_ki=0.5)
+    data = batch()
+    clips, lengths = data["frames"], data["future_length"]
+    torch.manual_seed(3)
+    out = imaged.model(clips, lengths, sample=False)
+    with_image, without = imaged.soft_loss(clips, lengths, out), plain.soft_loss(clips, lengths, out)
+    keyframe_pos, _ = position_distributions(out["offset_probs"])
+    decoded = torch.sigmoid(imaged.model.decoder(out["key_emb"])).flatten(2)  # (B, M, D)
+    future = clips[:, imaged.model.n_cond :].flatten(2)
+    expected = []
+    for b in range(len(clips)):
+        inside = keyframe_pos[b, :, 1 : lengths[b] + 1]  # (M, n_b): P(keyframe t at frame j < n_b)
+        c = inside.sum(-1)
+        terms = []
+        for t in range(out["key_emb"].shape[1]):
+            target = (inside[t, :, None] * future[b, : lengths[b]]).sum(0) / c[t].clamp_min(1e-6)
+            p = decoded[b, t].clamp(1e-6, 1 - 1e-6)
+            terms.append(-(target * p.log() + (1 - target) * (1 - p).log()).sum())
+        expected.append((c * torch.stack(terms)).sum() / c.sum())
+    torch.testing.assert_close(with_image["loss"] - without["loss"], 0.5 * torch.stack(expected).mean(), rtol=1e-4, atol=1e-3)
+    torch.testing.assert_close(with_image["key_img"], torch.stack(expected).mean(), rtol=1e-4, atol=1e-3)
+    with_image["loss"].backward()
+    assert all(p.grad is None for p in imaged.model.decoder.parameters())
+    assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in imaged.model.predictor.parameters())
