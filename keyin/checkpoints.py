@@ -12,6 +12,7 @@ import torch
 from keyin.errors import CheckpointError
 from keyin.lit.legacy import current_model_name, upgrade_state_dict
 from keyin.models.keyin import STAGE1
+from keyin.models.state import sub_state_dict
 from keyin.pretrained import full_precision, resolve
 
 CONFIG_KEY = "keyin_config"
@@ -103,11 +104,8 @@ def load_stage1(path: str | Path) -> dict[str, Any]:
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint; stage 2 starts from {STAGE_CHECKPOINTS['interpolator']} "
             f"or from the stage 1 inside {STAGE_CHECKPOINTS['keyframes']}"
         )
-    networks = {
-        name[len("model.") :]: value
-        for name, value in checkpoint["state_dict"].items()
-        if name.startswith(tuple(f"model.{network}." for network in STAGE1))
-    }
+    model = sub_state_dict(checkpoint["state_dict"], "model.")
+    networks = {name: value for name, value in model.items() if name.startswith(tuple(f"{network}." for network in STAGE1))}
     return {"hyper_parameters": checkpoint["hyper_parameters"]["stage1"], "state_dict": networks}
 
 

@@ -24,6 +24,7 @@ from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.models import FrameAutoencoder
 from keyin.viz.keyframes import save_keyframe_pictures
+from keyin.lit.optimizers import adam
 
 
 def placement_metrics(placements: dict[str, FramePlacement], prefix: str) -> dict[str, float]:
@@ -142,4 +143,4 @@ class FrameAutoencoderModule(L.LightningModule):
         return {}
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr)
+        return adam(self, self.hparams.lr)

@@ -26,6 +26,8 @@ from keyin.models import InterpolatorPosterior
 from keyin.models.distributions import gaussian_kl
 from keyin.models.interpolator import interpolate_segments
 from keyin.models.keyin import stage1_networks
+from keyin.lit.optimizers import adam
+from keyin.models.state import sub_state_dict
 
 
 class InterpolatorModule(L.LightningModule):
@@ -105,10 +107,7 @@ class InterpolatorModule(L.LightningModule):
                 f"stage 1's sizes to the autoencoder's"
             )
         for name in ("encoder", "decoder"):
-            prefix = f"network.{name}."
-            getattr(self, name).load_state_dict(
-                {key[len(prefix):]: value for key, value in checkpoint["state_dict"].items() if key.startswith(prefix)}
-            )
+            getattr(self, name).load_state_dict(sub_state_dict(checkpoint["state_dict"], f"network.{name}."))
 
     def segment_bce(
         self,
@@ -188,5 +187,4 @@ class InterpolatorModule(L.LightningModule):
             self.log(f"val/bce_bent_o{offset}", row["bent"], sync_dist=True)
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        trainable = [p for p in self.parameters() if p.requires_grad]
-        return torch.optim.Adam(trainable, lr=self.hparams.lr, betas=(0.9, 0.999))
+        return adam(self, self.hparams.lr)

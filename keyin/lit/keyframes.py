@@ -26,6 +26,7 @@ from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
 from keyin.models.distributions import gaussian_kl
 from keyin.models.keyin import FROZEN_IN_STAGE2
 from keyin.models.positions import argmax_positions
+from keyin.lit.optimizers import adam
 
 
 class KeyframeModule(KeyframeRules, L.LightningModule):
@@ -193,5 +194,4 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        trainable = [p for p in self.parameters() if p.requires_grad]
-        return torch.optim.Adam(trainable, lr=self.hparams.lr, betas=(0.9, 0.999))
+        return adam(self, self.hparams.lr)

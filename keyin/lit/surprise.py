@@ -22,6 +22,7 @@ from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.svg import SVGTerms, kl_reveal_ratio, kl_schedule, svg_loss, svg_terms
 from keyin.models import SVG, ConvDecoder, ConvEncoder, SVGCore
+from keyin.lit.optimizers import adam
 
 
 class SurpriseModule(L.LightningModule):
@@ -146,4 +147,4 @@ class SurpriseModule(L.LightningModule):
         return {name: self.discover, f"{name}_shift{other}": functools.partial(self.discover, shift=other)}
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr, betas=(0.9, 0.999))
+        return adam(self, self.hparams.lr)

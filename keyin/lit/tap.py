@@ -22,6 +22,7 @@ from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.tap import argmin_times, pair_autoencoding_bce, pair_bce, sample_pairs, shortest_gap, whole_clip_pairs
 from keyin.models import TAPNetwork
+from keyin.lit.optimizers import adam
 
 
 class TAPModule(L.LightningModule):
@@ -143,4 +144,4 @@ class TAPModule(L.LightningModule):
         return {}
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        return torch.optim.Adam(self.parameters(), lr=self.hparams.lr)
+        return adam(self, self.hparams.lr)

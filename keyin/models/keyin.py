@@ -17,6 +17,7 @@ from torch import Tensor, nn
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
+from keyin.models.state import sub_state_dict
 from keyin.models.positions import argmax_frames, position_distributions, soft_keyframe_targets
 
 STAGE1 = ("encoder", "decoder", "interpolator")  # the networks stage 1 trains and stage 2 freezes
@@ -109,8 +110,7 @@ class KEYIN(nn.Module):
     def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
         """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""
         for name in STAGE1:
-            prefix = f"{name}."
-            getattr(self, name).load_state_dict({k[len(prefix) :]: v for k, v in state_dict.items() if k.startswith(prefix)})
+            getattr(self, name).load_state_dict(sub_state_dict(state_dict, f"{name}."))
 
     def freeze_stage1(self, frozen: str = "stage1") -> None:
         """No gradients into the stage-1 networks that ``frozen`` names (:data:`FROZEN_IN_STAGE2`) and
