@@ -18,7 +18,8 @@ validation clips and logs each term of the loss there. The arms change one chann
 - ``beta_ke100`` / ``beta_ke1000``: the paper's loss with β_ke = 100 / 1000 (K̂ held to its frames harder);
 - ``scratch_*``: not a warm start: a fresh keyin_paper predictor on the checkpoint's stage 1, the interpolator reading
   K̃^e(δ), with aids that keep δ from saturating: the offset head initialised to zero (``_uniform``), its logits' temperature
-  annealed from 10 to 1 over 1000 steps (``_anneal``), its learning rate a tenth of the rest's (``_slow``);
+  annealed from 10 to 1 over 1000 steps (``_anneal``), its learning rate a tenth of the rest's (``_slow``), the keyframe
+  KL's weight 0 so that nothing pulls the latents to the prior (``_kl0``);
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
   weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
@@ -59,6 +60,7 @@ class Arm:
     lr: float = 1e-3
     expected: bool = False  # L_inter as the expected BCE over where each frame lands
     beta_ke: float | None = None  # None: the checkpoint's β_ke (1)
+    beta_kl: float | None = None  # None: the checkpoint's β (0.05)
     # from scratch: a fresh keyin_paper predictor (backbone=ours, scale=cpu) on the checkpoint's stage 1, and aids against
     # δ saturating before the clips' information reaches it (issue 62, item 3)
     scratch: bool = False
@@ -82,6 +84,7 @@ ARMS = {
     "scratch_frames_uniform": Arm(scratch=True, tie="interpolator", uniform_init=True),
     "scratch_frames_anneal": Arm(scratch=True, tie="interpolator", uniform_init=True, temperature=10.0),
     "scratch_frames_slow": Arm(scratch=True, tie="interpolator", uniform_init=True, offset_lr_scale=0.1),
+    "scratch_frames_kl0": Arm(scratch=True, tie="interpolator", uniform_init=True, beta_kl=0.0),
 }
 
 
@@ -161,6 +164,8 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
     module = scratch_module(ckpt) if spec.scratch else load_training_module(ckpt)[0]
     if spec.beta_ke is not None:
         module.hparams.beta_ke = spec.beta_ke
+    if spec.beta_kl is not None:
+        module.hparams.beta_kl = spec.beta_kl
     head = module.model.predictor.offset_head
     if spec.uniform_init:
         torch.nn.init.zeros_(head.weight)
