@@ -218,15 +218,25 @@ def summary(probs: Tensor, clips: Clips) -> dict[str, float]:
 
 
 def descend(
-    reading: Reading, stage1: Stage1, start: Tensor, clips: Clips, tied: bool, steps: int, lr: float, every: list[int]
+    reading: Reading, stage1: Stage1, start: Tensor | None, clips: Clips, tied: bool, steps: int, lr: float, every: list[int],
+    n_keyframes: int = 6,
 ) -> list[dict[str, float]]:
-    """Adam on (θ, K̂) from hard offsets ``start`` (B, M) softened to p = 0.9; a row at each step in ``every``."""
+    """Adam on (θ, K̂) from hard offsets ``start`` (B, M) softened to p = 0.9, or from uniform offsets (``start=None``,
+    K̂ at its soft target there); a row at each step in ``every``."""
     torch.manual_seed(0)
-    logits = softened_logits(start, stage1.max_offset).requires_grad_(True)
+    if start is None:
+        logits = torch.zeros(len(clips.truth), n_keyframes, stage1.max_offset, requires_grad=True)
+    else:
+        logits = softened_logits(start, stage1.max_offset).requires_grad_(True)
     params = [logits]
     key_emb = None
     if not tied:
-        key_emb = frame_embeddings_at(clips.boundary_emb, start).clone().requires_grad_(True)
+        if start is None:
+            keyframe_pos, _ = position_distributions(logits.detach().softmax(-1))
+            key_emb = soft_keyframe_targets(keyframe_pos, clips.lengths, clips.future_emb, reading.normalize_key_targets)
+        else:
+            key_emb = frame_embeddings_at(clips.boundary_emb, start)
+        key_emb = key_emb.clone().requires_grad_(True)
         params.append(key_emb)
     optimizer = torch.optim.Adam(params, lr=lr)
     rows = []
@@ -269,6 +279,7 @@ def main() -> None:
     parser.add_argument("--constant", type=int, default=None, help="the collapsed pattern's spacing (default: the dataset's Constant)")
     parser.add_argument("--readings", nargs="*", default=[r.name for r in READINGS], choices=[r.name for r in READINGS])
     parser.add_argument("--json", type=Path, help="also write every number as JSON here")
+    parser.add_argument("--uniform", action="store_true", help="also descend from uniform offsets (free and tied K̂)")
     args = parser.parse_args()
     torch.manual_seed(0)
     module, config = load_trained_module(args.ckpt, args.stage)
@@ -296,6 +307,10 @@ def main() -> None:
             entry[f"gradient_{mode}"] = gradient_toward_truth(reading, stage1, truth, clips, tied)
             entry[f"from_truth_{mode}"] = descend(reading, stage1, truth, clips, tied, args.steps, args.lr, every)
         entry["from_collapsed_free"] = descend(reading, stage1, collapsed, clips, False, args.steps, args.lr, every)
+        if args.uniform:  # no information about the clip at the start, as a stage 2 trained from scratch
+            for tied in (False, True):
+                entry[f"from_uniform_{'tied' if tied else 'free'}"] = descend(
+                    reading, stage1, None, clips, tied, args.steps, args.lr, every, n_keys)
         results[reading.name] = entry
         print(reading.name, json.dumps({k: v for k, v in entry.items() if k != "reading"})[:600], flush=True)
         if args.json:  # after each reading: a stopped run keeps what it measured
