@@ -38,7 +38,6 @@ class KeyframeOutput(NamedTuple):
         attention: (B, M, N) attention weights α over the future frames; None in prior mode.
         boundary_scores: (B, N) per-frame boundary logits of ``offset_evidence`` (posterior mode);
             None otherwise.
-        head_logits: (B, M, S) the offset head's own logits, before any evidence.
     """
 
     key_emb: Tensor
@@ -49,7 +48,6 @@ class KeyframeOutput(NamedTuple):
     z: Tensor
     attention: Tensor | None
     boundary_scores: Tensor | None = None
-    head_logits: Tensor | None = None
 
 
 class KeyframePredictor(nn.Module):
@@ -215,26 +213,6 @@ class KeyframePredictor(nn.Module):
             logits.append(logit)
         return torch.stack(logits, dim=1)
 
-    @in_float32
-    def offset_log_probs(self, head_logits: Tensor, scores: Tensor, mask: Tensor) -> Tensor:
-        """log δ^t for every place of the previous keyframe: what :meth:`_add_boundary_evidence`
-        gives along one path, for all paths at once.
-
-        Args:
-            head_logits: (B, M, S) the offset head's logits; scores: (B, N) boundary logits; mask: (B, N).
-        Returns:
-            (B, M, L_ext, S): entry [b, t, k, a] is log δ^{t+1}(offset a + 1) with keyframe t at
-            extended index k (L_ext = M·S + 1; rows k that no path reaches are finite but unused).
-        """
-        _, n_keys, max_offset = head_logits.shape
-        n_ext = n_keys * max_offset + 1
-        extended, none_through = self._extended_scores(scores, mask, n_ext + max_offset)  # room past the last reachable index
-        k = torch.arange(n_ext)[:, None]
-        a = torch.arange(max_offset)[None]
-        # log p[k+a+1] + Σ_{k<i≤k+a} log(1 - p[i])
-        evidence = F.logsigmoid(extended[:, k + a + 1]) + none_through[:, k + a] - none_through[:, k]  # (B, L_ext, S)
-        return torch.log_softmax(head_logits[:, :, None] + evidence[:, None], dim=-1)
-
     def forward(
         self,
         cond_emb: Tensor,
@@ -307,7 +285,7 @@ class KeyframePredictor(nn.Module):
             log_sigmas.append(log_sigma)
             latents.append(latent)
 
-        head_logits = offset_logits = self.offset_head(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
+        offset_logits = self.offset_head(torch.stack(hidden_outputs, dim=1))  # (B, M, S)
         if boundary_scores is not None:
             offset_logits = self._add_boundary_evidence(offset_logits, boundary_scores, mask, chain)
         return KeyframeOutput(
@@ -319,5 +297,4 @@ class KeyframePredictor(nn.Module):
             z=torch.stack(latents, dim=1),
             attention=torch.stack(attentions, dim=1) if attentions else None,  # (B, M, N)
             boundary_scores=boundary_scores,  # (B, N) or None
-            head_logits=head_logits,
         )
