@@ -11,6 +11,7 @@ from hydra import compose, initialize_config_module
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import OmegaConf
 
+from keyin.cli.reproduce import sweep_overrides
 from keyin.cli.app import CONFIG_MODULE
 from keyin.cli.checks import SCALE_KEYS
 from keyin.planning.servo import ServoParams
@@ -132,12 +133,12 @@ def test_every_job_of_every_table_composes(table):
         cfg = compose("reproduce", overrides=[f"table={table}"])
         for sweep in cfg.table.sweeps:
             if sweep.program == "export":  # python -m keyin.cli.pretrained export CKPT... --folder DIR: argv, not overrides
-                args = list(sweep.overrides)
+                args = sweep_overrides(cfg.table, sweep)
                 folder, checkpoints = args[args.index("--folder") + 1], [arg for arg in args if arg.endswith(".ckpt")]
                 names = [args[args.index("--name") + 1]] if "--name" in args else [Path(c).parents[2].name for c in checkpoints]
                 assert sorted(sweep.creates) == sorted(f"{folder}/{name}.ckpt" for name in names)  # --name, else the run dir's
                 continue
-            split = (override.partition("=") for override in sweep.overrides if not override.startswith("hydra."))
+            split = (override.partition("=") for override in sweep_overrides(cfg.table, sweep) if not override.startswith("hydra."))
             # every option of every key but the seed (seeds compose alike; the experiment tests sweep them)
             choices = [[f"{key}={value}" for value in values.split(",")[: 1 if key == "seed" else None]] for key, _, values in split]
             for job in itertools.product(*choices):

@@ -39,6 +39,12 @@ def made_already(sweep: DictConfig) -> bool:
     return bool(created) and all(Path(path).is_file() for path in created)
 
 
+def sweep_overrides(table: DictConfig, sweep: DictConfig) -> list[str]:
+    """A sweep's overrides: those of the table's ``shared`` lists it names in ``share`` (in order), then its own."""
+    shared = table.get("shared") or {}
+    return [*(override for name in sweep.get("share") or [] for override in shared[name]), *sweep.overrides]
+
+
 def commands(cfg: DictConfig) -> list[list[str]]:
     """The keyin-generate and sweep calls of the chosen steps, in order, without the sweeps made already."""
     table, calls = cfg.table, []
@@ -51,9 +57,9 @@ def commands(cfg: DictConfig) -> list[list[str]]:
             if made_already(sweep):
                 continue
             if sweep.program == "export":
-                calls.append([PROGRAMS["export"], "export", *sweep.overrides])
+                calls.append([PROGRAMS["export"], "export", *sweep_overrides(table, sweep)])
             else:
-                calls.append([PROGRAMS[sweep.program], "-m", *sweep.overrides, f"data_dir={cfg.data_dir}"])
+                calls.append([PROGRAMS[sweep.program], "-m", *sweep_overrides(table, sweep), f"data_dir={cfg.data_dir}"])
     return calls
 
 
@@ -114,9 +120,14 @@ def check_table(cfg: DictConfig) -> None:
     unknown = [step for step in cfg.steps if step not in STEPS]
     if unknown:
         raise ConfigError(f"steps={list(cfg.steps)}: {unknown} are not steps; use any of {list(STEPS)}")
+    shared = cfg.table.get("shared") or {}
     for index, sweep in enumerate(cfg.table.sweeps):
         if sweep.program not in PROGRAMS:
             raise ConfigError(f"table.sweeps[{index}].program={sweep.program!r} must be one of {sorted(PROGRAMS)}")
+        unknown = [name for name in sweep.get("share") or [] if name not in shared]
+        if unknown:
+            raise ConfigError(f"table.sweeps[{index}].share names {unknown}, which table.shared does not hold; "
+                              f"it holds {sorted(shared)}")
 
 
 @user_errors

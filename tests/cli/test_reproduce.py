@@ -110,3 +110,23 @@ def test_collect_copies_a_planners_outcome_pictures_and_no_other_picture(tmp_pat
     copied = tmp_path / "jobs" / "keyin_seed0" / "pictures"
     assert sorted(path.name for path in copied.iterdir()) == ["outcome_not_crossed_task007.png"]
     assert (copied / "outcome_not_crossed_task007.png").read_bytes() == b"\x89PNG not crossed"
+
+
+def test_a_sweep_puts_the_shared_lists_it_names_before_its_own_overrides_and_an_unknown_name_is_refused():
+    import pytest
+    from omegaconf import OmegaConf
+
+    from keyin.cli.reproduce import check_table, sweep_overrides
+    from keyin.errors import ConfigError
+
+    table = OmegaConf.create({
+        "shared": {"stage2": ["model=keyin_paper", "stage=keyframes"], "shipped": ["interpolator_ckpt=pretrained:brownian"]},
+        "sweeps": [{"program": "train", "share": ["stage2", "shipped"], "overrides": ["seed=1"]},
+                   {"program": "train", "overrides": ["seed=2"]}],
+    })
+    assert sweep_overrides(table, table.sweeps[0]) == [
+        "model=keyin_paper", "stage=keyframes", "interpolator_ckpt=pretrained:brownian", "seed=1"]
+    assert sweep_overrides(table, table.sweeps[1]) == ["seed=2"]
+    table.sweeps[1].share = ["stage_2"]
+    with pytest.raises(ConfigError, match=r"table.sweeps\[1\].share names \['stage_2'\], which table.shared does not hold"):
+        check_table(OmegaConf.create({"steps": ["jobs"], "table": table}))
