@@ -44,9 +44,11 @@ from keyin.decode.offsets import offset_keyframes  # noqa: E402
 from keyin.decode.segment_costs import interpolation_costs  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
 from keyin.lit.registry import load_trained_module  # noqa: E402
-from keyin.losses.soft_keyframe import bce_sum, in_sequence_probs, soft_keyframe_targets  # noqa: E402
+from keyin.losses.soft_keyframe import bce_sum, in_sequence_probs  # noqa: E402
 from keyin.models.keyin import interpolator_offsets  # noqa: E402
-from keyin.models.positions import PROB_EPS, future_window, position_distributions, valid_frame_mask  # noqa: E402
+from keyin.models.positions import (  # noqa: E402
+    PROB_EPS, future_window, position_distributions, soft_keyframe_targets, valid_frame_mask,
+)
 
 
 @dataclass(frozen=True)

@@ -48,9 +48,8 @@ from keyin.data.datamodule import split_clips  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
 from keyin.lit.registry import load_training_module  # noqa: E402
 from keyin.models.modes import evaluating  # noqa: E402
-from keyin.losses.soft_keyframe import offset_entropy, soft_keyframe_targets  # noqa: E402
-from keyin.models.keyin import interpolator_offsets  # noqa: E402
-from keyin.models.positions import position_distributions  # noqa: E402
+from keyin.losses.soft_keyframe import offset_entropy  # noqa: E402
+from keyin.models.positions import position_distributions, soft_keyframe_targets  # noqa: E402
 from hydra.utils import instantiate  # noqa: E402
 
 @dataclass(frozen=True)
@@ -129,14 +128,11 @@ def forward(module, clips: torch.Tensor, lengths: torch.Tensor, arm: Arm) -> dic
     """The posterior forward of ``KEYIN.forward``, with the latents' mean when not ``arm.sample`` and the
     interpolator reading K̃^e(δ) where ``arm.tie`` says so."""
     model = module.model
+    model.interpolate_from = "predicted" if arm.tie == "none" else "frames"  # keyin's option (models/keyin.py)
     out = model(clips, lengths, sample=arm.sample)
-    if arm.tie != "none":
+    if arm.tie == "all":
         keyframe_pos, _ = position_distributions(out["offset_probs"])
-        targets = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
-        if arm.tie == "all":
-            out["key_emb"] = targets
-        out["frames"] = model.interpolate(out["boundary_emb"][:, 0], targets,
-                                          interpolator_offsets(out["offset_probs"], model.delta_input))
+        out["key_emb"] = soft_keyframe_targets(keyframe_pos, lengths, out["future_emb"], normalize=True)
     return out
 
 

@@ -13,9 +13,7 @@ from torch import Tensor
 
 from keyin.precision import in_float32
 from keyin.models.distributions import gaussian_kl
-from keyin.models.positions import (  # noqa: F401  (soft_keyframe_targets: imported from here too)
-    PROB_EPS, position_distributions, soft_frames, soft_keyframe_targets, valid_frame_mask,
-)
+from keyin.models.positions import PROB_EPS, position_distributions, soft_frames, soft_keyframe_targets, valid_frame_mask
 
 IGNORE_OFFSET = -100
 """A keyframe without a teacher offset (``cross_entropy``'s ignore index)."""
@@ -154,7 +152,6 @@ def keyin_loss(
         inter_frames_pred = _at_least_float32(inter_frames_pred)
         future_frames = _at_least_float32(future_frames)
         kl_per_key = _at_least_float32(kl_per_key)
-        n_future = future_frames.shape[1]
 
         keyframe_pos, frame_pos = position_distributions(offset_probs)
         in_sequence = in_sequence_probs(keyframe_pos, lengths)

@@ -7,7 +7,8 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from keyin.losses.soft_keyframe import bce_sum, in_sequence_probs, keyin_loss, soft_keyframe_targets
+from keyin.losses.soft_keyframe import bce_sum, in_sequence_probs, keyin_loss
+from keyin.models.positions import soft_keyframe_targets
 from keyin.models.distributions import gaussian_kl
 from keyin.models.positions import argmax_frames, argmax_positions, position_distributions, soft_frames
 
