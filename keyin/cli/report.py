@@ -41,6 +41,7 @@ from keyin.eval.report import (
     is_planning,
     markdown_table,
     method_sort_key,
+    ranking_changes,
     read_metrics,
     summarise,
 )
@@ -163,7 +164,7 @@ def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
         f"{', '.join(sorted({str(r['scale']) for r in records if r.get('scale')})) or '– (evaluation jobs only)'}.\n\n"
     )
     written = [out / "table1.md", out / "table1.csv"]
-    atomic_write_text(written[0], header + markdown_table(rows))
+    atomic_write_text(written[0], header + markdown_table(rows) + "\n" + ranking_changes(rows))
     atomic_write_text(written[1], csv_table(rows))
     # The bars are the interior column (docs/evaluation.md) unless a job predates it.
     score = "f1_interior" if not any(math.isnan(row.mean["f1_interior"]) for row in rows) else "f1"

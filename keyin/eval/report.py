@@ -30,8 +30,8 @@ PAPER_TABLE1 = {
 PAPER_ROWS = ("random", "constant", "static", "jumpy", "surprise", "keyin_paper")  # the paper's methods, as published
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
-    "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "precision", "recall", "n_predicted", "hausdorff",
-    "train_seconds", "score_seconds",
+    "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "f1_tol2_interior", "f1_tol2", "precision", "recall",
+    "n_predicted", "hausdorff", "train_seconds", "score_seconds",
 )  # the information rule's columns (docs/evaluation.md) first; a keyin 0.1 job has only the rest
 TIMES = ("train_seconds", "score_seconds")  # a job's wall times in its process, where it recorded them
 
@@ -173,6 +173,10 @@ def _paper(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
+def _score(value: float) -> str:
+    return "–" if math.isnan(value) else f"{value:.3f}"
+
+
 def _spread(mean: float, std: float) -> str:
     return "–" if math.isnan(mean) else f"{mean:.3f} ± {std:.3f}"
 
@@ -209,18 +213,56 @@ def markdown_table(rows: list[TableRow]) -> str:
     jobs counts in the one that trained it, a resumed job its last part only); the paper's methods first, our additions after them (``row``: paper or ours) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
     lines = [
         "| dataset | method | row | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
-        "| precision | recall | keyframes/clip | Hausdorff | train + score (min) | seeds |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| ±2 F1 interior | precision | recall | keyframes/clip | Hausdorff | train + score (min) | seeds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         m, s = row.mean, row.std
         lines.append(
             f"| {row.dataset} | {row.method} | {row_source(row.method)} | {_spread(m['f1_interior'], s['f1_interior'])} | "
             f"{_spread(m['f1_with_ends'], s['f1_with_ends'])} | {_spread(m['f1'], s['f1'])} | {_paper(row.paper_f1)} | "
-            f"{'–' if math.isnan(m['f1_tol1_interior']) else format(m['f1_tol1_interior'], '.3f')} | "
-            f"{m['f1_tol1']:.3f} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
+            f"{_score(m['f1_tol1_interior'])} | {m['f1_tol1']:.3f} | {_score(m['f1_tol2_interior'])} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
             f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {_minutes(row)} | {len(row.seeds)} |"
         )
+    return "\n".join(lines) + "\n"
+
+
+TOLERANCE_SCORES = {"exact": "f1_interior", "±1": "f1_tol1_interior", "±2": "f1_tol2_interior"}
+
+
+def rankings(rows: list[TableRow]) -> dict[str, dict[str, list[str]]]:
+    """Per dataset, its methods best first by each score of :data:`TOLERANCE_SCORES` (interior F1 at 0, ±1
+    and ±2 frames), each ranking over the rows that have that score (a job may predate ±2)."""
+    ranked: dict[str, dict[str, list[str]]] = {}
+    for dataset in sorted({row.dataset for row in rows}):
+        own = [row for row in rows if row.dataset == dataset]
+        ranked[dataset] = {
+            name: [row.method for row in sorted((r for r in own if not math.isnan(r.mean[score])), key=lambda r: -r.mean[score])]
+            for name, score in TOLERANCE_SCORES.items()
+        }
+    return ranked
+
+
+def ranking_changes(rows: list[TableRow]) -> str:
+    """Markdown: where the order of the methods by exact F1 changes when a keyframe may be ±1 or ±2 frames off.
+
+    Per dataset and tolerance, each method whose rank moves, as "method exact rank → rank at ±k" (ranks among
+    the methods scored at both; "no change" where none moves); rows that lack the score are named."""
+    lines = ["## Where the ranking changes with the tolerance", ""]
+    for dataset, ranked in rankings(rows).items():
+        for name in ("±1", "±2"):
+            both = [method for method in ranked["exact"] if method in ranked[name]]
+            tolerant = [method for method in ranked[name] if method in both]
+            moved = [
+                f"{method} {i + 1} → {tolerant.index(method) + 1}" for i, method in enumerate(both) if tolerant[i] != method
+            ]
+            said = ", ".join(moved) if moved else "no change"
+            missing = [method for method in ranked["exact"] if method not in both]
+            if not both:
+                said = "no method scored"
+            if missing:
+                said += f" (not scored at {name}: {', '.join(missing)}; their jobs predate the column)"
+            lines.append(f"- {dataset}, ranks by exact F1 → at {name}: {said}.")
     return "\n".join(lines) + "\n"
 
 

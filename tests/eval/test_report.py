@@ -5,7 +5,9 @@ import json
 import pytest
 
 from keyin.cli import report
-from keyin.eval.report import collect_metrics, csv_table, markdown_table, method_sort_key, row_source, summarise
+from keyin.eval.report import (
+    collect_metrics, csv_table, markdown_table, method_sort_key, ranking_changes, row_source, summarise,
+)
 
 
 def write_job(root, name, method, seed, f1, version="0.2.0", **extra):
@@ -140,3 +142,14 @@ def test_brief_prints_each_methods_f1_beside_the_papers_and_writes_nothing(sweep
     assert "| 0.550 ± 0.100 | 0.84 |" in keyin_plus  # interior F1 0.45, 0.55, 0.65 over seeds 0-2
     assert all(f"{sweep}/keyin_plus_seed{seed}/metrics.json" in keyin_plus for seed in range(3))
     assert not (sweep / "report").exists()
+
+
+def test_the_ranking_paragraph_names_each_method_whose_rank_moves_with_the_tolerance(tmp_path):
+    # exact: a 0.9 > b 0.5 > c 0.3; at ±1: c 0.95 > a 0.92 > b 0.6; at ±2 only b and c were scored: c > b
+    for name, exact, tol1, tol2 in (("a", 0.9, 0.92, None), ("b", 0.5, 0.6, 0.7), ("c", 0.3, 0.95, 0.99)):
+        tol2_scores = {} if tol2 is None else dict(f1_tol2=tol2, f1_tol2_interior=tol2)
+        write_job(tmp_path, f"{name}_seed0", name, 0, exact, f1_tol1_interior=tol1, **tol2_scores)
+    said = ranking_changes(summarise(collect_metrics(tmp_path)))
+    assert "- brownian, ranks by exact F1 → at ±1: a 1 → 2, b 2 → 3, c 3 → 1." in said
+    assert "- brownian, ranks by exact F1 → at ±2: b 1 → 2, c 2 → 1 (not scored at ±2: a; their jobs predate the column)." in said
+    assert "±2 F1 interior" in markdown_table(summarise(collect_metrics(tmp_path)))
