@@ -172,7 +172,7 @@ def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
         [row.dataset for row in rows], [row.method for row in rows], [row.mean[score] for row in rows],
         [row.std[score] for row in rows], [row.paper_f1 for row in rows], out / "table1_f1.png",
     ))
-    for dataset in sorted({row.dataset for row in rows}):
+    for dataset in sorted({row.dataset for row in rows}) if n_examples > 0 else ():
         job, predicted, truth = example_predictions(records, dataset)
         if not predicted or not job_config(job).is_file():
             continue
@@ -189,7 +189,7 @@ def main(argv: list[str] | None = None) -> None:
                         help="one or more sweep dirs (e.g. runs/multirun/brownian_table1); their jobs are merged by "
                              "method and seed, and a method with the same seed in two of them is refused")
     parser.add_argument("--out", type=Path, default=None, help="output dir (default: <first sweep>/report)")
-    parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures")
+    parser.add_argument("--examples", type=int, default=4, help="test clips in the example figures (0: draw none, e.g. where the test data is not on this machine)")
     parser.add_argument("--brief", action="store_true",
                         help="print a short table (method, F1 interior, the paper's F1, its metrics.json) and write no files")
     parser.add_argument("--threshold", type=float, default=None,

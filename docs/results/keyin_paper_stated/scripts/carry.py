@@ -1,0 +1,93 @@
+"""Carry a background job's resumable checkpoint from one machine to the next (issue 62).
+
+A session's machine may be replaced before the next session, and git-ignored run folders go with it. ``save``
+writes the job's ``last.ckpt`` into ``models/in_progress/`` (committed): the weights as they are, Adam's moments in
+bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' float32 on resume), and lists it in
+``models/manifest.json`` and the folder's ``models.json``. ``restore`` puts it back where the job resumes from.
+
+    python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>      # e.g. /work/jobs stated_seed0
+    python docs/results/keyin_paper_stated/scripts/carry.py restore <jobs dir> <job>
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import torch
+
+from keyin.io import atomic_write_text, sha256_of
+
+ROOT = Path(__file__).resolve().parents[4]
+FOLDER = ROOT / "models" / "in_progress"
+MANIFEST = ROOT / "models" / "manifest.json"
+COMMAND = "sh docs/results/keyin_paper_stated/scripts/stage1.sh <seed> <jobs dir> <data dir>"
+EXPORT = "python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>"
+
+
+def job_checkpoint(jobs: Path, job: str) -> Path:
+    return jobs / job / "checkpoints" / "interpolator" / "last.ckpt"
+
+
+def slimmed(checkpoint: dict) -> dict:
+    """The checkpoint with every floating optimizer state tensor (Adam's moments) in bfloat16; weights untouched."""
+    for optimizer in checkpoint.get("optimizer_states", []):
+        for state in optimizer["state"].values():
+            for key, value in state.items():
+                if key != "step" and torch.is_tensor(value) and value.is_floating_point():
+                    state[key] = value.to(torch.bfloat16)
+    return checkpoint
+
+
+def save(jobs: Path, job: str) -> Path:
+    source = job_checkpoint(jobs, job)
+    checkpoint = torch.load(source, map_location="cpu", weights_only=False)
+    target = FOLDER / f"{job}_stage1_last.ckpt"
+    FOLDER.mkdir(parents=True, exist_ok=True)
+    partial = target.with_suffix(".ckpt.partial")
+    torch.save(slimmed(checkpoint), partial)
+    partial.replace(target)
+    card = {
+        "file": target.name, "bytes": target.stat().st_size, "sha256": sha256_of(target), "command": COMMAND,
+        "source_sha256": sha256_of(source), "global_step": checkpoint["global_step"], "stage": "interpolator",
+        "model": "keyin_paper_stated_20k", "dataset": "brownian",
+    }
+    cards_path = FOLDER / "models.json"
+    cards = json.loads(cards_path.read_text()) if cards_path.is_file() else {}
+    cards[target.stem] = card
+    atomic_write_text(cards_path, json.dumps(cards, indent=1, sort_keys=True) + "\n")
+    manifest = json.loads(MANIFEST.read_text())
+    path = str(target.relative_to(ROOT))
+    entry = {key: card[key] for key in ("sha256", "bytes", "command", "source_sha256", "model", "stage", "dataset")}
+    entry |= {"path": path, "export": EXPORT, "table": "docs/results/keyin_paper_stated"}
+    manifest["models"] = [e for e in manifest["models"] if e["path"] != path] + [entry]
+    atomic_write_text(MANIFEST, json.dumps(manifest, indent=1) + "\n")
+    print(f"{source} (step {checkpoint['global_step']}) → {path}, {card['bytes']} bytes")
+    return target
+
+
+def restore(jobs: Path, job: str) -> None:
+    source, target = FOLDER / f"{job}_stage1_last.ckpt", job_checkpoint(jobs, job)
+    if target.is_file():
+        print(f"{target} exists: the job resumes from it")
+        return
+    if not source.is_file():
+        print(f"no {source.relative_to(ROOT)}: the job starts from scratch")
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(source.read_bytes())
+    print(f"{source.relative_to(ROOT)} → {target}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("action", choices=("save", "restore"))
+    parser.add_argument("jobs", type=Path)
+    parser.add_argument("job")
+    args = parser.parse_args()
+    (save if args.action == "save" else restore)(args.jobs, args.job)
+
+
+if __name__ == "__main__":
+    main()
