@@ -1,0 +1,49 @@
+"""The stated configuration's carried checkpoint (docs/results/keyin_paper_stated/scripts/carry.py): Adam's moments
+travel in bfloat16 and come back as the weights' float32, the weights and the step exactly."""
+
+import importlib.util
+from pathlib import Path
+
+import torch
+
+SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "keyin_paper_stated" / "scripts" / "carry.py"
+spec = importlib.util.spec_from_file_location("carry", SCRIPT)
+carry = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(carry)
+
+
+def test_a_slimmed_checkpoint_resumes_adam_with_its_moments_to_bfloat16_precision(tmp_path):
+    torch.manual_seed(0)
+    net = torch.nn.Linear(8, 4)
+    adam = torch.optim.Adam(net.parameters(), lr=2e-4)
+    for _ in range(3):
+        adam.zero_grad()
+        net(torch.randn(16, 8)).pow(2).mean().backward()
+        adam.step()
+    checkpoint = {"state_dict": {k: v.clone() for k, v in net.state_dict().items()}, "optimizer_states": [adam.state_dict()], "global_step": 3}
+    before = {i: {k: v.clone() for k, v in s.items()} for i, s in adam.state_dict()["state"].items()}
+    torch.save(carry.slimmed(checkpoint), tmp_path / "last.ckpt")
+    loaded = torch.load(tmp_path / "last.ckpt", weights_only=False)
+    assert loaded["optimizer_states"][0]["state"][0]["exp_avg"].dtype == torch.bfloat16
+    assert all(torch.equal(loaded["state_dict"][k], v) for k, v in net.state_dict().items())
+    resumed = torch.optim.Adam(net.parameters(), lr=2e-4)
+    resumed.load_state_dict(loaded["optimizer_states"][0])
+    for index, state in resumed.state_dict()["state"].items():
+        assert float(state["step"]) == 3.0
+        for key in ("exp_avg", "exp_avg_sq"):
+            assert state[key].dtype == torch.float32
+            torch.testing.assert_close(state[key], before[index][key], rtol=1e-2, atol=0)
+
+
+def test_restore_puts_the_carried_file_where_the_job_resumes_and_never_over_a_newer_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(carry, "ROOT", tmp_path)
+    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
+    carry.FOLDER.mkdir(parents=True)
+    (carry.FOLDER / "stated_seed0_stage1_last.ckpt").write_bytes(b"carried")
+    jobs = tmp_path / "jobs"
+    carry.restore(jobs, "stated_seed0")
+    target = carry.job_checkpoint(jobs, "stated_seed0")
+    assert target.read_bytes() == b"carried"
+    target.write_bytes(b"newer")
+    carry.restore(jobs, "stated_seed0")
+    assert target.read_bytes() == b"newer"
