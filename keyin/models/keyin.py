@@ -64,10 +64,11 @@ def stage1_networks(
         image_size=frames.image_size, channels=frames.channels, width=frames.conv_width, embed_dim=frames.embed_dim,
         coord_channels=frames.coord_channels, norm=frames.norm,
     )
-    return ConvEncoder(**conv), ConvDecoder(**conv), Interpolator(
+    inter = Interpolator(  # made first: the fresh weights' random draws in their order of before
         frames.embed_dim, max_offset, interpolator.latent_dim, interpolator.lstm_hidden, interpolator.lstm_layers,
         interpolator.mlp_hidden, interpolator.step_input,
     )
+    return ConvEncoder(**conv), ConvDecoder(**conv), inter
 
 
 class KEYIN(nn.Module):
