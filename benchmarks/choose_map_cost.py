@@ -50,7 +50,7 @@ def main() -> None:
                         help="map_pruned's least boundary logit of a keyframe, each scored at the model's α")
     args = parser.parse_args()
     module, config = load_trained_module(args.ckpt, "keyframes")
-    dataset, stage1 = config["dataset"], module.hparams.stage1
+    dataset, stage1 = config["dataset"], module.config.stage1_hparams()
     image = (stage1["image_size"], stage1["image_size"], stage1["channels"])
     clips = ShardClips(split_files(Path(args.data_dir) / dataset["name"], args.split), image, stage1["n_cond"], stage1["n_future"])
     clips = Subset(clips, range(min(args.clips, len(clips))))
@@ -69,7 +69,7 @@ def main() -> None:
         for rows in [(lengths == length).nonzero().flatten()]
     }
     seconds = time.perf_counter() - started
-    max_offset, n_keys = model.predictor.max_offset, module.hparams.n_keyframes
+    max_offset, n_keys = model.predictor.max_offset, module.config.predictor.n_keyframes
     truth, n_future = keyframe_lists(batch["keyframes"]), stage1["n_future"]
 
     def decode(cost: float | str, weight: float, candidate_logit: float | None = None) -> list[list[int]]:

@@ -52,7 +52,6 @@ from keyin.decode.rules import BOUNDARY_SCORE_RULES, SEGMENT_COST_RULES
 from keyin.eval.f1 import keyframe_scores
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module
-from keyin.losses.image import plain_bce
 from keyin.models.keyin import KEYIN
 from keyin.pipelines.discover import discover_videos
 from keyin.pretrained import is_pretrained
@@ -127,7 +126,7 @@ def long_clip(folder: Path, n_frames: int, kind: str, data_dir: Path) -> tuple[P
 def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int], out: Path, shared: bool = True) -> dict:
     """One model and rule through keyin-discover's path (``shared``: the segment costs once per video,
     as keyin-discover computes them); its times, frames per second and F1 on the clip."""
-    sizes = module.hparams.stage1
+    sizes = module.config.stage1_hparams()
     n_cond, n_future = sizes["n_cond"], sizes["n_future"]
     spec = ImportSpec(image_size=sizes["image_size"], channels=sizes["channels"], n_cond=n_cond, n_future=n_future,
                       window_stride=n_future // 2)
@@ -136,7 +135,7 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
     decode = time.perf_counter() - started
     videos, _, _ = read_videos(clip, spec, None, None, progress=False)
     discoverer = functools.partial(module.discover, discovery=rule, keyframe_cost="knee")
-    shared = shared and rule in SEGMENT_COST_RULES and plain_bce(sizes)  # else each window computes its own
+    shared = shared and rule in SEGMENT_COST_RULES and module.config.frames.plain_bce  # else each window computes its own
     folder = out / label / f"{rule}-{shared}"
     with timed_parts() as parts:
         video_costs = module.video_costs if shared else None  # the timed method
@@ -214,8 +213,8 @@ def main() -> None:
         baseline = changepoint_row(clip, turns, args.clip)
         results = [(run(module, label, rule, clip, movie, turns, Path(tmp), shared), scored)
                    for label, module, scored in models for rule in args.rules
-                   for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and plain_bce(module.hparams.stage1) else (True,))
-                   if rule not in BOUNDARY_SCORE_RULES or module.hparams.offset_evidence]
+                   for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and module.config.frames.plain_bce else (True,))
+                   if rule not in BOUNDARY_SCORE_RULES or module.config.predictor.offset_evidence]
     for (shared, _), (alone, _) in zip(results, results[1:]):
         if alone["label"] == shared["label"] + " per window" and alone["keyframes"] != shared["keyframes"]:
             raise SystemExit(f"{shared['label']}: the shared segment costs found other keyframes than the per-window ones")

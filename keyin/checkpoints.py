@@ -10,7 +10,8 @@ from typing import Any, Mapping
 import torch
 
 from keyin.errors import CheckpointError
-from keyin.lit.legacy import current_model_name, upgrade_state_dict
+from keyin.lit.legacy import current_model_name, upgrade_keyframe_hparams, upgrade_state_dict
+from keyin.models.config import KEYINConfig
 from keyin.models.keyin import STAGE1
 from keyin.models.state import sub_state_dict
 from keyin.pretrained import full_precision, resolve
@@ -80,6 +81,8 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
     if not isinstance(checkpoint, dict) or STAGE_KEY not in checkpoint:
         raise CheckpointError(f"{path} is not a keyin checkpoint (no '{STAGE_KEY}' entry); {PASS_A_CHECKPOINT}")
     checkpoint["state_dict"] = full_precision(upgrade_state_dict(checkpoint["state_dict"], checkpoint[STAGE_KEY]))
+    if checkpoint[STAGE_KEY] == "keyframes":  # flat hyper-parameters before the typed configs
+        checkpoint["hyper_parameters"] = upgrade_keyframe_hparams(checkpoint["hyper_parameters"])
     if stage is not None and checkpoint[STAGE_KEY] != stage:
         raise CheckpointError(
             f"{path} is a '{checkpoint[STAGE_KEY]}' checkpoint but a '{stage}' one is needed"
@@ -90,8 +93,9 @@ def load_checkpoint(path: str | Path, stage: str | None = None) -> dict[str, Any
 
 def load_stage1(path: str | Path) -> dict[str, Any]:
     """The stage-1 checkpoint that stage 2 starts from, or the frozen stage 1 inside a stage-2
-    checkpoint (``pretrained:<name>`` included): ``hyper_parameters`` and ``state_dict`` of the
-    interpolator module, so that several stage 2s can be trained on one shipped stage 1.
+    checkpoint (``pretrained:<name>`` included): ``hyper_parameters`` (the interpolator module's; of a
+    stage 2, its stage-1 sizes: :meth:`keyin.models.config.KEYINConfig.stage1_hparams`) and ``state_dict``
+    of the interpolator module, so that several stage 2s can be trained on one shipped stage 1.
 
     Raises:
         CheckpointError: as :func:`load_checkpoint`, or a checkpoint of neither stage.
@@ -106,7 +110,8 @@ def load_stage1(path: str | Path) -> dict[str, Any]:
         )
     model = sub_state_dict(checkpoint["state_dict"], "model.")
     networks = {name: value for name, value in model.items() if name.startswith(tuple(f"{network}." for network in STAGE1))}
-    return {"hyper_parameters": checkpoint["hyper_parameters"]["stage1"], "state_dict": networks}
+    stage1 = KEYINConfig.from_dict(checkpoint["hyper_parameters"]["net"]).stage1_hparams()
+    return {"hyper_parameters": stage1, "state_dict": networks}
 
 
 def parameter_shapes(state_dict: Mapping[str, Any]) -> dict[str, tuple[int, ...]]:

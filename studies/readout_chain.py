@@ -134,7 +134,7 @@ def main() -> None:
     report = "\n".join([
         f"## KEYIN's argmax readout, soft vs argmax evidence chain, {len(clips)} {args.split} clips ({name})\n",
         f"- command: `python studies/readout_chain.py {args.ckpt} --clips {args.clips} --split {args.split}`",
-        f"- model: {config['model']['name']} (offset evidence: {module.hparams.offset_evidence}), "
+        f"- model: {config['model']['name']} (offset evidence: {module.config.predictor.offset_evidence}), "
         f"trained {load_checkpoint(args.ckpt)['global_step']} steps",
         f"- machine: {cpu_model()}, {torch.get_num_threads()} threads, torch {torch.__version__}, {date.today()}\n",
         *rows,

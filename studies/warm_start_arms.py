@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import dataclasses
 from dataclasses import dataclass
 import sys
 import time
@@ -159,9 +160,9 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
     torch.manual_seed(seed)
     module = scratch_module(ckpt) if spec.scratch else load_training_module(ckpt)[0]
     if spec.beta_ke is not None:
-        module.hparams.beta_ke = spec.beta_ke
+        module.loss = dataclasses.replace(module.loss, beta_ke=spec.beta_ke)
     if spec.beta_kl is not None:
-        module.hparams.beta_kl = spec.beta_kl
+        module.loss = dataclasses.replace(module.loss, beta_kl=spec.beta_kl)
     head = module.model.predictor.offset_head
     if spec.uniform_init:
         torch.nn.init.zeros_(head.weight)

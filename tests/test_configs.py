@@ -59,6 +59,8 @@ ADDED_SINCE = {
 }
 # Classes that moved since keyin 0.1, old path → new path.
 MOVED_TARGETS = {f"keyin.eval.baselines.{name}": f"keyin.decode.baselines.{name}" for name in ("RandomKeyframes", "ConstantKeyframes")}
+# Stage 2's flat keys are typed by a factory since the typed configs (issue 59).
+MOVED_TARGETS["keyin.lit.keyframes.KeyframeModule"] = "keyin.lit.keyframes.KeyframeModule.from_flat"
 
 
 def module_arguments(model: dict) -> dict:

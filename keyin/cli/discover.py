@@ -109,9 +109,9 @@ def chosen_rule(cfg: DictConfig, module: Any) -> str:
 
 def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> dict[str, Any]:
     """What keyframes.json says about the model and its rule."""
-    sizes = module.hparams.stage1
+    sizes = module.config.stage1_hparams()
     rule = chosen_rule(cfg, module)
-    if rule in BOUNDARY_SCORE_RULES and not module.hparams.offset_evidence:
+    if rule in BOUNDARY_SCORE_RULES and not module.config.predictor.offset_evidence:
         raise ConfigError(f"rule={rule} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
                           f"has not; pass rule=map or rule=offsets")
     cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
@@ -127,7 +127,6 @@ def discover(cfg: DictConfig) -> dict:
     from keyin.data.imports import ImportSpec
     from keyin.devices import batch_size_on, choose_device, device_record
     from keyin.lit.registry import load_trained_module
-    from keyin.losses.image import plain_bce
     from keyin.pipelines.discover import discover_videos
 
     device = choose_device(cfg.device)
@@ -152,7 +151,7 @@ def discover(cfg: DictConfig) -> dict:
         videos, discoverer, module.keyframe_probabilities, run_dir(), {**model, **ran}, n_cond, n_future,
         cfg.frame_stride, stride, seam=cfg.seam, batch_size=batch_size, progress=cfg.progress,
         pictures=bool(cfg.pictures), video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
-        segments=module.map_pruned_segments if model["rule"] == "map_pruned" and plain_bce(module.hparams.stage1) else None,
+        segments=module.map_pruned_segments if model["rule"] == "map_pruned" and module.config.frames.plain_bce else None,
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"], **ran)
     write_metrics(summary, run_dir())

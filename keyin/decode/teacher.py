@@ -9,6 +9,8 @@ the targets are :func:`keyin.losses.soft_keyframe.offset_teacher_loss` and
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from torch import Tensor
 
@@ -16,6 +18,19 @@ from keyin.decode.segment_costs import embedding_costs
 from keyin.decode.segmentation import KeyframeCost, decode_by_length, segmentation_offsets
 from keyin.losses.soft_keyframe import boundary_teacher_loss, offset_teacher_loss
 from keyin.models.keyin import KEYIN
+
+
+@dataclass(frozen=True)
+class TeacherConfig:
+    """The segmentation teacher of stage 2 (ours, off at ``weight`` 0): its loss weight, the clips per
+    step it scores (0: all), its price per keyframe (nats, or "knee"), teacher forcing of the previous
+    keyframe (``chain``) and whether it also says where the chain leaves the clip (``leaves``)."""
+
+    weight: float = 0.0
+    clips: int = 0
+    keyframe_cost: KeyframeCost = 0.0
+    chain: bool = False
+    leaves: bool = False
 
 
 @torch.no_grad()

@@ -9,42 +9,20 @@ share it, so both find the same keyframes.
 from __future__ import annotations
 
 import functools
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Sequence
 
 import torch
 from torch import nn
 
 from keyin.decode.names import BOUNDARY_SCORE_RULES, VARIANT_RULES
-from keyin.decode.rules import MAP_CANDIDATE_LOGIT, keyin_keyframe_probabilities, keyin_keyframes, map_pruned_segments
+from keyin.decode.rules import keyin_keyframe_probabilities, keyin_keyframes, map_pruned_segments
 from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KeyframeCost
 from keyin.models.modes import evaluating
-from keyin.losses.image import future_pixel_weights, model_pixel_weights, plain_bce
-from keyin.models import KEYIN, KeyframePredictor
-from keyin.models.keyin import stage1_networks
-
-# The defaults of KeyframeModule's arguments that building and running a trained model reads, for
-# checkpoints saved before the argument existed (tests/decode/test_trained.py keeps them equal).
-INFERENCE_DEFAULTS: dict[str, Any] = {
-    "offset_evidence": False, "discovery": "offsets", "map_keyframe_cost": 120.0, "map_boundary_weight": 10.0,
-    "map_candidate_logit": MAP_CANDIDATE_LOGIT, "delta_input": "soft", "gumbel_offsets": False,
-    "interpolate_from": "predicted",
-}
-
-
-def keyin_model(hparams: Mapping[str, Any]) -> KEYIN:
-    """The KEYIN model (stage 1's networks and the keyframe predictor) sized by a stage-2 module's
-    hyper-parameters; its weights come from a checkpoint."""
-    stage1 = hparams["stage1"]
-    encoder, decoder, interpolator = stage1_networks(stage1)
-    predictor = KeyframePredictor(
-        stage1["embed_dim"], hparams["n_keyframes"], stage1["max_offset"], hparams["latent_dim"], hparams["lstm_hidden"],
-        hparams["lstm_layers"], attn_scale=hparams["attn_scale"], offset_mode=hparams["offset_mode"],
-        fixed_offset=hparams["fixed_offset"], offset_evidence=hparams["offset_evidence"],
-    )
-    return KEYIN(encoder, decoder, interpolator, predictor, stage1["n_cond"], delta_input=hparams["delta_input"],
-                 gumbel_offsets=hparams["gumbel_offsets"], interpolate_from=hparams["interpolate_from"])
-
+from keyin.lit.legacy import upgrade_keyframe_hparams
+from keyin.losses.image import changed_pixel_weights, future_pixel_weights
+from keyin.models import KEYIN
+from keyin.models.config import KEYINConfig
 
 class Hyperparameters(dict):
     """A dict whose keys read and write as attributes too (``hparams.discovery``), as Lightning's."""
@@ -61,15 +39,17 @@ class Hyperparameters(dict):
 
 class KeyframeRules:
     """The discovery rules of a stage-2 model; the class that mixes it in has ``model`` (a
-    :class:`keyin.models.KEYIN`), ``hparams`` and ``device``."""
+    :class:`keyin.models.KEYIN`), its ``config``, ``hparams`` (the discovery rule's) and ``device``."""
 
     model: KEYIN
+    config: KEYINConfig
     hparams: Any
     device: torch.device
 
     def pixel_weights(self, clips: torch.Tensor) -> torch.Tensor | None:
         """(B, L, C, H, W) weights of the image likelihood stage 1 was trained with, or None."""
-        return model_pixel_weights(clips, self.hparams.stage1)
+        frames = self.config.frames
+        return changed_pixel_weights(clips, frames.foreground_weight, frames.foreground_threshold)
 
     @torch.no_grad()
     def discover(
@@ -114,7 +94,7 @@ class KeyframeRules:
         Returns:
             (T - 1, S) on the module's device, or None.
         """
-        if not plain_bce(self.hparams.stage1):
+        if not self.config.frames.plain_bce:
             return None
         pixels = frames.permute(0, 3, 1, 2).flatten(1)  # (T, C·H·W) uint8, as the clips' layout; moved a block at a time
         embeddings = []
@@ -138,10 +118,10 @@ class KeyframeRules:
         picks among those, "map_pruned" (with offset evidence) and "segmentation" (any model: stage 1's
         segmentation at the same price)."""
         scored = [self.hparams.discovery]
-        if self.hparams.offset_evidence:
+        if self.config.predictor.offset_evidence:
             scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
         if rules is not None:
-            extra = ("map_pruned", "segmentation") if self.hparams.offset_evidence else ("segmentation",)
+            extra = ("map_pruned", "segmentation") if self.config.predictor.offset_evidence else ("segmentation",)
             choosable = scored + [rule for rule in extra if rule not in scored]
             unknown = [rule for rule in rules if rule not in choosable]
             if unknown:
@@ -158,17 +138,20 @@ class TrainedKeyframes(KeyframeRules, nn.Module):
     for inference only; its state dict's names are :class:`keyin.lit.keyframes.KeyframeModule`'s.
 
     Args:
-        hparams: the checkpoint's ``hyper_parameters``; :data:`INFERENCE_DEFAULTS` fill those it lacks.
+        hparams: the checkpoint's ``hyper_parameters`` (those of a checkpoint saved before the typed
+            configs upgraded: :func:`keyin.lit.legacy.upgrade_keyframe_hparams`).
     """
 
     stage = "keyframes"
 
     def __init__(self, **hparams: Any) -> None:
         super().__init__()
-        if hparams.get("discovery", "offsets") in BOUNDARY_SCORE_RULES and not hparams.get("offset_evidence"):
+        hparams = upgrade_keyframe_hparams(hparams)
+        self.config = KEYINConfig.from_dict(hparams["net"])
+        if hparams["discovery"] in BOUNDARY_SCORE_RULES and not self.config.predictor.offset_evidence:
             raise ValueError(f"discovery={hparams['discovery']!r} needs offset_evidence (the boundary scores)")
-        object.__setattr__(self, "hparams", Hyperparameters({**INFERENCE_DEFAULTS, **hparams}))
-        self.model = keyin_model(self.hparams)
+        object.__setattr__(self, "hparams", Hyperparameters(hparams))
+        self.model = KEYIN.from_config(self.config)
 
     @property
     def device(self) -> torch.device:

@@ -25,6 +25,7 @@ from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segmen
 from keyin.models import InterpolatorPosterior
 from keyin.models.distributions import gaussian_kl
 from keyin.models.interpolator import interpolate_segments
+from keyin.models.config import FrameModelConfig, InterpolatorConfig, picked
 from keyin.models.keyin import stage1_networks
 from keyin.lit.optimizers import adam
 from keyin.models.state import sub_state_dict
@@ -67,7 +68,9 @@ class InterpolatorModule(L.LightningModule):
         if not 1 <= offset_min <= offset_max <= max_offset:
             raise ValueError(f"interpolator offsets [{offset_min}, {offset_max}] must lie in [1, max_offset={max_offset}]")
         self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
-        self.encoder, self.decoder, self.interpolator = stage1_networks(self.hparams)
+        self.encoder, self.decoder, self.interpolator = stage1_networks(
+            picked(FrameModelConfig, self.hparams), picked(InterpolatorConfig, self.hparams), max_offset
+        )
         self.posterior = InterpolatorPosterior(embed_dim, latent_dim, lstm_hidden) if latent_dim else None
         self.segment_rng = torch.Generator().manual_seed(0)
         if frozen_frames:

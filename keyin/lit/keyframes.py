@@ -8,7 +8,9 @@ keyframe-embedding and offset heads. The loss is the soft keyframe loss (eq. 3-5
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any, Mapping
 
 import lightning as L
 import torch
@@ -16,17 +18,18 @@ import torch
 from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES
 from keyin.decode.rules import MAP_CANDIDATE_LOGIT
 from keyin.decode.segmentation import KNEE
-from keyin.decode.teacher import teacher_loss
-from keyin.decode.trained import KeyframeRules, keyin_model
+from keyin.decode.teacher import TeacherConfig, teacher_loss
+from keyin.decode.trained import KeyframeRules
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.lit.legacy import upgrade_state_dict
+from keyin.lit.legacy import typed_keyframe_arguments, upgrade_keyframe_hparams, upgrade_state_dict
 from keyin.models.modes import evaluating
 from keyin.losses.image import future_pixel_weights
-from keyin.losses.soft_keyframe import REDUCTIONS, keyin_loss, offset_entropy
+from keyin.losses.soft_keyframe import SoftLossConfig, keyin_loss, offset_entropy
 from keyin.models.distributions import gaussian_kl
-from keyin.models.keyin import FROZEN_IN_STAGE2
+from keyin.models.config import KEYINConfig
+from keyin.models.keyin import FROZEN_IN_STAGE2, KEYIN
 from keyin.models.positions import argmax_positions
-from keyin.lit.optimizers import adam
+from keyin.lit.optimizers import OptimizerPartial, optimizer_partial, optimizer_spec, trained_parameters
 
 
 class KeyframeModule(KeyframeRules, L.LightningModule):
@@ -38,60 +41,62 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
 
     def __init__(
         self,
-        stage1: dict[str, Any],
-        n_keyframes: int,
-        latent_dim: int,
-        lstm_hidden: int,
-        lstm_layers: int,
-        attn_scale: bool,
-        offset_mode: str,
-        fixed_offset: int | None,
-        beta_ke: float,
-        beta_ki: float,
-        beta_kl: float,
-        normalize_key_targets: bool,
-        lr: float,
-        # our additions (docs/decisions.md); these defaults are the paper's method
-        teacher_weight: float = 0.0,
-        teacher_clips: int = 0,
-        offset_evidence: bool = False,
+        net: KEYINConfig | Mapping[str, Any],
+        loss: SoftLossConfig | Mapping[str, Any],
+        optimizer: OptimizerPartial | Mapping[str, Any],
+        teacher: TeacherConfig | Mapping[str, Any] | None = None,  # ours, off by default (docs/decisions.md)
         discovery: str = "offsets",
-        teacher_keyframe_cost: float | str = 0.0,  # nats per keyframe in the teacher's DP, or "knee"
-        teacher_chain: bool = False,  # teacher forcing of the previous keyframe's position (decode/teacher.py)
-        teacher_leaves: bool = False,  # the teacher also says where the chain leaves the clip
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
         map_candidate_logit: float = MAP_CANDIDATE_LOGIT,  # discovery=map_pruned: a keyframe's least boundary logit
-        # the paper's open choices (docs/decisions.md "The paper's stage 2: every open choice measured")
-        delta_input: str = "soft",  # what the frozen interpolator reads of δ (models/keyin.py DELTA_INPUTS)
-        loss_reduction: str = "sum",  # what the β's weigh against (losses/soft_keyframe.py REDUCTIONS)
-        # a label-free optimisation aid the paper does not have: + w·H(δ) rewarded, w decaying linearly
-        # from entropy_bonus to 0 over entropy_bonus_steps training steps
-        entropy_bonus: float = 0.0,
-        entropy_bonus_steps: int = 0,
-        gumbel_offsets: bool = False,  # an aid the paper does not have (models/keyin.py)
         frozen: str = "stage1",  # which stage-1 networks stage 2 freezes (models/keyin.py FROZEN_IN_STAGE2)
-        interpolate_from: str = "predicted",  # ours: "frames" (models/keyin.py INTERPOLATE_FROM)
     ) -> None:
+        """
+        Args:
+            net: the model's sizes and choices (a dict: :func:`dataclasses.asdict`'s).
+            loss: the soft keyframe loss's weights.
+            optimizer: a partial of a ``torch.optim`` class taking the parameters (or its spec,
+                :func:`keyin.lit.optimizers.optimizer_spec`).
+            teacher: the segmentation teacher; None: off.
+            discovery, map_*: the discovery rule (:class:`keyin.decode.trained.KeyframeRules`).
+            frozen: which of stage 1's networks stay frozen (:data:`keyin.models.keyin.FROZEN_IN_STAGE2`).
+        """
         super().__init__()
+        self.config = net if isinstance(net, KEYINConfig) else KEYINConfig.from_dict(net)
+        self.loss = loss if isinstance(loss, SoftLossConfig) else SoftLossConfig(**loss)
+        self.teacher = teacher if isinstance(teacher, TeacherConfig) else TeacherConfig(**(teacher or {}))
         if discovery not in KEYIN_RULES:
             raise ValueError(f"discovery must be one of {KEYIN_RULES}, got {discovery!r}")
         if isinstance(map_keyframe_cost, str) and map_keyframe_cost != KNEE:
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
-        if discovery in BOUNDARY_SCORE_RULES and not offset_evidence:
+        if discovery in BOUNDARY_SCORE_RULES and not self.config.predictor.offset_evidence:
             raise ValueError(f"discovery={discovery!r} needs offset_evidence (the boundary scores)")
         if frozen not in FROZEN_IN_STAGE2:
             raise ValueError(f"frozen must be one of {tuple(FROZEN_IN_STAGE2)}, got {frozen!r}")
-        if loss_reduction not in REDUCTIONS:
-            raise ValueError(f"loss_reduction must be one of {REDUCTIONS}, got {loss_reduction!r}")
-        if entropy_bonus < 0 or (entropy_bonus > 0 and entropy_bonus_steps < 1):
-            raise ValueError(
-                f"entropy_bonus must be >= 0 and, when > 0, decay over entropy_bonus_steps >= 1 steps; "
-                f"got {entropy_bonus} over {entropy_bonus_steps}"
-            )
-        self.save_hyperparameters(logger=False)  # the trackers get the whole run config (keyin.cli.tracking)
-        self.model = keyin_model(self.hparams)
+        # the checkpoint keeps plain dicts (weights_only loading), load_from_checkpoint rebuilds the configs
+        self.save_hyperparameters(
+            {"net": asdict(self.config), "loss": asdict(self.loss), "optimizer": optimizer_spec(optimizer),
+             "teacher": asdict(self.teacher), "discovery": discovery, "map_keyframe_cost": map_keyframe_cost,
+             "map_boundary_weight": map_boundary_weight, "map_candidate_logit": map_candidate_logit, "frozen": frozen},
+            logger=False,  # the trackers get the whole run config (keyin.cli.tracking)
+        )
+        self.optimizer = optimizer_partial(self.hparams.optimizer)
+        self.model = KEYIN.from_config(self.config)
         self.freeze_stage1()
+
+    @classmethod
+    def from_flat(cls, **flat: Any) -> "KeyframeModule":
+        """The module of flat stage-2 hyper-parameters: ``model.keyframes`` of conf/model/keyin.yaml (the
+        keys users override) with the stage-1 module's hyper-parameters as ``stage1``
+        (:func:`keyin.lit.legacy.typed_keyframe_arguments`)."""
+        return cls(**typed_keyframe_arguments(flat))
+
+    @classmethod
+    def load_from_checkpoint(cls, checkpoint_path: str | Path, *args: Any, **kwargs: Any) -> "KeyframeModule":
+        """Lightning's, with the flat hyper-parameters of a checkpoint saved before the typed configs
+        upgraded (:func:`keyin.lit.legacy.upgrade_keyframe_hparams`)."""
+        saved = torch.load(checkpoint_path, map_location="cpu", weights_only=True)["hyper_parameters"]
+        return super().load_from_checkpoint(checkpoint_path, *args, **{**upgrade_keyframe_hparams(saved), **kwargs})
 
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
@@ -122,33 +127,32 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         """The paper's loss (:func:`keyin.losses.soft_keyframe.keyin_loss`) of a posterior forward ``out``
         of (B, L, C, H, W) ``clips``, with this module's weights and reduction; with ``beta_ki > 0`` eq. 3's
         image term scores the decoded keyframes ``sigmoid(CNN_dec(K̂^{e,t}))`` against the soft targets K̃^t."""
-        hp, n_cond = self.hparams, self.model.n_cond
+        weights, n_cond = self.loss, self.model.n_cond
         key_frames = None
-        if hp.beta_ki > 0:
+        if weights.beta_ki > 0:
             # float32, as the interpolated frames: these probabilities meet the loss's logs
             key_frames = torch.sigmoid(self.model.decoder(out["key_emb"]).float()).flatten(2)  # (B, M, C·H·W)
         return keyin_loss(
             out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
-            gaussian_kl(out["mu"], out["log_sigma"]), future_length, hp.beta_ke, hp.beta_ki, hp.beta_kl,
-            hp.normalize_key_targets, key_frames_pred=key_frames,
+            gaussian_kl(out["mu"], out["log_sigma"]), future_length, weights.beta_ke, weights.beta_ki, weights.beta_kl,
+            weights.normalize_key_targets, key_frames_pred=key_frames,
             pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
-            reduction=hp.loss_reduction, latent_dim=hp.latent_dim,
+            reduction=weights.reduction, latent_dim=self.config.predictor.latent_dim,
         )
 
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> dict[str, torch.Tensor]:
         clips, future_length = batch["frames"], batch["future_length"]
-        hp = self.hparams
+        teacher = self.teacher
         out = self.model(clips, future_length)
         terms = self.soft_loss(clips, future_length, out)
-        if stage == "train" and hp.entropy_bonus > 0:  # an aid the paper does not have (docs/decisions.md)
-            weight = hp.entropy_bonus * max(0.0, 1.0 - self.global_step / hp.entropy_bonus_steps)
+        if stage == "train" and self.loss.entropy_bonus > 0:  # an aid the paper does not have (docs/decisions.md)
+            weight = self.loss.entropy_weight(self.global_step)
             terms["loss"] = terms["loss"] - weight * offset_entropy(out["offset_probs"]).mean()
-        if stage == "train" and hp.teacher_weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
+        if stage == "train" and teacher.weight > 0:  # ours, off in the paper's setting (docs/decisions.md)
             terms["teacher"] = teacher_loss(
-                self.model, clips, out, future_length, hp.teacher_keyframe_cost, hp.teacher_clips, hp.teacher_chain,
-                hp.teacher_leaves,
+                self.model, clips, out, future_length, teacher.keyframe_cost, teacher.clips, teacher.chain, teacher.leaves,
             )
-            terms["loss"] = terms["loss"] + hp.teacher_weight * terms["teacher"]
+            terms["loss"] = terms["loss"] + teacher.weight * terms["teacher"]
             self.log("train/teacher", terms["teacher"])
         logged = {"loss": terms["loss"], "offset_entropy": offset_entropy(out["offset_probs"]).mean()}
         logged |= {key: terms[key].mean() for key in ("inter", "key_emb", "kl")}
@@ -190,8 +194,8 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
             "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
-            "max_offset": self.hparams.stage1["max_offset"],
+            "max_offset": self.config.max_offset,
         }
 
     def configure_optimizers(self) -> torch.optim.Optimizer:
-        return adam(self, self.hparams.lr)
+        return self.optimizer(trained_parameters(self))

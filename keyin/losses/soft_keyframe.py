@@ -7,6 +7,8 @@ Clips may have different valid lengths ``n_b <= N`` (``lengths``); positions ``>
 excluded from ``c^t``, from the keyframe targets and from ``L_inter`` (docs/architecture.md, "Padding and masking").
 """
 
+from dataclasses import dataclass
+
 import torch
 import torch.nn.functional as F
 from torch import Tensor
@@ -23,6 +25,34 @@ not say; docs/decisions.md): "sum" BCE summed over pixels and frames, ``ℓ_ke``
 ``ℓ_KL`` over latent dims; "per_frame" ``L_inter`` averaged over the clip's valid frames instead (the
 keyframe terms are already averaged over keyframes); "per_pixel" every term a mean per scalar: BCE over
 pixels and frames, ``ℓ_ke`` over embedding dims, ``ℓ_KL`` over latent dims."""
+
+
+@dataclass(frozen=True)
+class SoftLossConfig:
+    """The weights of stage 2's loss (paper eq. 3, :func:`keyin_loss`) and what they weigh against
+    (``reduction``, :data:`REDUCTIONS`); ``entropy_bonus`` (an aid the paper does not have) rewards
+    w·H(δ), w decaying linearly from ``entropy_bonus`` to 0 over ``entropy_bonus_steps`` training steps."""
+
+    beta_ke: float
+    beta_ki: float
+    beta_kl: float
+    normalize_key_targets: bool = True
+    reduction: str = "sum"
+    entropy_bonus: float = 0.0
+    entropy_bonus_steps: int = 0
+
+    def __post_init__(self) -> None:
+        if self.reduction not in REDUCTIONS:
+            raise ValueError(f"loss_reduction must be one of {REDUCTIONS}, got {self.reduction!r}")
+        if self.entropy_bonus < 0 or (self.entropy_bonus > 0 and self.entropy_bonus_steps < 1):
+            raise ValueError(
+                f"entropy_bonus must be >= 0 and, when > 0, decay over entropy_bonus_steps >= 1 steps; "
+                f"got {self.entropy_bonus} over {self.entropy_bonus_steps}"
+            )
+
+    def entropy_weight(self, step: int) -> float:
+        """w at training step ``step``."""
+        return self.entropy_bonus * max(0.0, 1.0 - step / self.entropy_bonus_steps) if self.entropy_bonus > 0 else 0.0
 
 
 def in_sequence_probs(keyframe_pos: Tensor, lengths: Tensor) -> Tensor:

@@ -8,12 +8,11 @@ with another offset head (``KeyframePredictor.offset_mode``).
 
 from __future__ import annotations
 
-from typing import Any, Mapping
-
 import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
+from keyin.models.config import FrameModelConfig, InterpolatorConfig, KEYINConfig
 from keyin.models.conv import ConvDecoder, ConvEncoder
 from keyin.models.interpolator import Interpolator
 from keyin.models.keyframe_predictor import Chain, KeyframeOutput, KeyframePredictor
@@ -57,18 +56,19 @@ def interpolator_offsets(offset_probs: Tensor, delta_input: str) -> Tensor:
     raise ValueError(f"delta_input must be one of {DELTA_INPUTS}, got {delta_input!r}")
 
 
-def stage1_networks(stage1: Mapping[str, Any]) -> tuple[ConvEncoder, ConvDecoder, Interpolator]:
-    """The encoder, decoder and interpolator of a stage-1 module's hyper-parameters (its
-    ``hparams``: sizes and the frame model's choices); their weights come from its checkpoint."""
+def stage1_networks(
+    frames: FrameModelConfig, interpolator: InterpolatorConfig, max_offset: int
+) -> tuple[ConvEncoder, ConvDecoder, Interpolator]:
+    """The encoder, decoder and interpolator stage 1 trains; their weights come from its checkpoint."""
     conv = dict(
-        image_size=stage1["image_size"], channels=stage1["channels"], width=stage1["conv_width"],
-        embed_dim=stage1["embed_dim"], coord_channels=stage1["coord_channels"], norm=stage1["norm"],
+        image_size=frames.image_size, channels=frames.channels, width=frames.conv_width, embed_dim=frames.embed_dim,
+        coord_channels=frames.coord_channels, norm=frames.norm,
     )
-    interpolator = Interpolator(
-        stage1["embed_dim"], stage1["max_offset"], stage1["latent_dim"], stage1["lstm_hidden"], stage1["lstm_layers"],
-        stage1["mlp_hidden"], stage1["step_input"],
+    inter = Interpolator(  # made first: the fresh weights' random draws in their order of before
+        frames.embed_dim, max_offset, interpolator.latent_dim, interpolator.lstm_hidden, interpolator.lstm_layers,
+        interpolator.mlp_hidden, interpolator.step_input,
     )
-    return ConvEncoder(**conv), ConvDecoder(**conv), interpolator
+    return ConvEncoder(**conv), ConvDecoder(**conv), inter
 
 
 class KEYIN(nn.Module):
@@ -106,6 +106,19 @@ class KEYIN(nn.Module):
         self.delta_input = delta_input
         self.gumbel_offsets = gumbel_offsets
         self.interpolate_from = interpolate_from
+
+    @classmethod
+    def from_config(cls, config: KEYINConfig) -> "KEYIN":
+        """The model ``config`` sizes, with fresh weights (a checkpoint's replace them)."""
+        encoder, decoder, interpolator = stage1_networks(config.frames, config.interpolator, config.max_offset)
+        sizes = config.predictor
+        predictor = KeyframePredictor(
+            config.frames.embed_dim, sizes.n_keyframes, config.max_offset, sizes.latent_dim, sizes.lstm_hidden,
+            sizes.lstm_layers, attn_scale=sizes.attn_scale, offset_mode=sizes.offset_mode, fixed_offset=sizes.fixed_offset,
+            offset_evidence=sizes.offset_evidence,
+        )
+        return cls(encoder, decoder, interpolator, predictor, config.n_cond, delta_input=config.delta_input,
+                   gumbel_offsets=config.gumbel_offsets, interpolate_from=config.interpolate_from)
 
     def load_stage1(self, state_dict: dict[str, Tensor]) -> None:
         """Copy the stage-1 networks' weights from a stage-1 state dict (``encoder.*``, ...)."""

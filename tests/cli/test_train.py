@@ -138,7 +138,7 @@ def test_the_papers_open_choices_train_on_the_stage_1_inside_a_stage_2_checkpoin
     assert result.returncode == 0, result.stderr
     module, config = load_trained_module(tmp_path / "run" / "checkpoints" / "keyframes" / "last.ckpt")
     assert config["model"]["name"] == "keyin_paper" and module.model.delta_input == "straight_through"
-    assert module.hparams.loss_reduction == "per_pixel" and module.hparams.entropy_bonus == 0.5
+    assert module.hparams.loss["reduction"] == "per_pixel" and module.hparams.loss["entropy_bonus"] == 0.5
     given = load_checkpoint(source)["state_dict"]
     for name, value in module.model.interpolator.state_dict().items():
         torch.testing.assert_close(value, given[f"model.interpolator.{name}"])

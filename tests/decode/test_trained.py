@@ -1,17 +1,34 @@
 """A stage-2 checkpoint built without Lightning finds the keyframes the LightningModule finds."""
 
+import dataclasses
 import inspect
 
 import torch
 
-from keyin.decode.trained import INFERENCE_DEFAULTS, TrainedKeyframes
+from keyin.decode.teacher import TeacherConfig
+from keyin.decode.trained import TrainedKeyframes
 from keyin.lit.keyframes import KeyframeModule
-from tests.lit.tiny_models import batch, stage2
+from keyin.lit.legacy import typed_keyframe_arguments
+from keyin.losses.soft_keyframe import SoftLossConfig
+from keyin.models.config import KEYINConfig, PredictorConfig
+from tests.lit.tiny_models import batch, stage1, stage2
 
 
-def test_the_inference_defaults_are_the_training_modules():
+def test_a_flat_checkpoint_without_the_later_options_upgrades_to_the_typed_defaults():
+    """The flat hyper-parameters' defaults (keyin.lit.legacy.FLAT_DEFAULTS, for checkpoints saved before
+    an option existed) are the typed module's and configs' defaults."""
+    flat = dict(stage1=dict(stage1("ours").hparams), n_keyframes=2, latent_dim=2, lstm_hidden=8, lstm_layers=1,
+                attn_scale=True, offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
+                normalize_key_targets=True, lr=1e-3)
+    typed = typed_keyframe_arguments(flat)
     defaults = {name: p.default for name, p in inspect.signature(KeyframeModule.__init__).parameters.items()}
-    assert {name: defaults[name] for name in INFERENCE_DEFAULTS} == INFERENCE_DEFAULTS
+    kept = ("discovery", "map_keyframe_cost", "map_boundary_weight", "map_candidate_logit", "frozen")
+    assert {key: typed[key] for key in kept} == {key: defaults[key] for key in kept}
+    assert typed["teacher"] == dataclasses.asdict(TeacherConfig())
+    assert typed["loss"] == dataclasses.asdict(SoftLossConfig(1.0, 0.0, 0.05))
+    net = KEYINConfig.from_dict(typed["net"])
+    assert net.predictor == PredictorConfig(2, 2, 8, 1)
+    assert (net.delta_input, net.gumbel_offsets, net.interpolate_from) == ("soft", False, "predicted")
 
 
 def test_the_plain_module_discovers_as_the_lightning_module_by_every_rule():

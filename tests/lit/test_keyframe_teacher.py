@@ -18,7 +18,7 @@ def keyframe_module(
     """A small stage-2 module; ``sizes`` override STAGE1's (e.g. image_size, channels)."""
     torch.manual_seed(0)
     stage1 = dict(InterpolatorModule(**{**STAGE1, **sizes}).hparams)
-    module = KeyframeModule(
+    module = KeyframeModule.from_flat(
         stage1=stage1, n_keyframes=3, latent_dim=4, lstm_hidden=16, lstm_layers=1, attn_scale=True,
         offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, teacher_weight=teacher_weight, teacher_clips=2,

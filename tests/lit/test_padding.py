@@ -4,6 +4,8 @@ Each test computes a loss twice on the same batch, once with the padding replace
 asserts the two are equal: the pushing demonstrations have clips of 26-31 frames padded to 31.
 """
 
+import dataclasses
+
 import pytest
 import torch
 
@@ -64,7 +66,7 @@ def test_stage1_diagnostic_ignores_the_padding():
 @pytest.mark.parametrize("foreground_weight", [1.0, 5.0])
 def test_stage2_loss_teacher_and_attention_ignore_the_padding(foreground_weight):
     module = keyframe_module(teacher_weight=10.0, offset_evidence=True, foreground_weight=foreground_weight)
-    module.hparams.teacher_clips = 0  # every clip, the short ones included
+    module.teacher = dataclasses.replace(module.teacher, clips=0)  # every clip, the short ones included
     results = []
     for batch in padded_batches():
         torch.manual_seed(2)

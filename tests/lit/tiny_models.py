@@ -38,7 +38,7 @@ def stage2(backbone: str = "ours", **options) -> KeyframeModule:
     hparams = dict(stage1(backbone).hparams)
     torch.manual_seed(1)
     defaults = dict(offset_mode="predicted", fixed_offset=None)
-    return KeyframeModule(
+    return KeyframeModule.from_flat(
         stage1=hparams, n_keyframes=KEYFRAMES, latent_dim=2, lstm_hidden=8, lstm_layers=1, attn_scale=True,
         beta_ke=1.0, beta_ki=0.0, beta_kl=0.05, normalize_key_targets=True, lr=1e-3, **{**defaults, **options},
     )

@@ -2,6 +2,7 @@
 shows that keyframes.json's frames are the original file's frames, at frame stride 1 and 2; a long
 clip's known turns survive the windows' merge; a crash leaves no half-written folder."""
 
+import dataclasses
 import json
 
 import imageio.v3 as iio
@@ -120,7 +121,7 @@ def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_
 
     module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map")
     np.save(tmp_path / "noise.npy", np.random.default_rng(0).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
-    n_future = module.hparams.stage1["n_future"]
+    n_future = module.config.n_future
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
     (video,), _, _ = read_videos(tmp_path / "noise.npy", windows, None, None, progress=False)
     received = []
@@ -154,7 +155,7 @@ def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(t
 
     module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map_pruned")
     np.save(tmp_path / "noise.npy", np.random.default_rng(1).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
-    n_future = module.hparams.stage1["n_future"]
+    n_future = module.config.n_future
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
     (video,), _, _ = read_videos(tmp_path / "noise.npy", windows, None, None, progress=False)
     clips = next(iter(window_batches(video, N_COND, n_future, 64)))[1]
@@ -193,7 +194,7 @@ def test_window_relative_pixel_weights_keep_each_windows_own_costs():
     from tests.lit.test_keyframe_teacher import keyframe_module
 
     module = keyframe_module(teacher_weight=0.0)
-    module.hparams.stage1["foreground_weight"] = 20.0  # changed pixels weigh more: relative to a window's first frame
+    module.config = dataclasses.replace(module.config, frames=dataclasses.replace(module.config.frames, foreground_weight=20.0))  # changed pixels weigh more: relative to a window's first frame
     assert module.video_costs(torch.zeros(5, 8, 8, 1, dtype=torch.uint8)) is None
 
 

@@ -25,7 +25,7 @@ def keyframe_module(**additions) -> KeyframeModule:
         **CONV, n_cond=1, n_future=6, max_offset=3, latent_dim=2, lstm_hidden=16, lstm_layers=1,
         step_input="boundaries", offset_min=1, offset_max=3, kl_weight=0.0, ae_weight=1.0, lr=1e-3,
     )
-    return KeyframeModule(
+    return KeyframeModule.from_flat(
         stage1=dict(stage1.hparams), n_keyframes=KEYFRAMES, latent_dim=KEY_LATENT, lstm_hidden=16, lstm_layers=1,
         attn_scale=True, offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,
         normalize_key_targets=True, lr=1e-3, **additions,
