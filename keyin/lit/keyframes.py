@@ -13,9 +13,7 @@ from typing import Any
 import lightning as L
 import torch
 
-from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES
-from keyin.decode.rules import MAP_CANDIDATE_LOGIT
-from keyin.decode.segmentation import KNEE
+from keyin.decode.registry import KNEE, MAP_CANDIDATE_LOGIT, PAPER_RULE, model_rule
 from keyin.decode.teacher import teacher_loss
 from keyin.decode.trained import KeyframeRules, keyin_model
 from keyin.eval.f1 import discovery_summary, keyframe_lists
@@ -55,7 +53,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         teacher_weight: float = 0.0,
         teacher_clips: int = 0,
         offset_evidence: bool = False,
-        discovery: str = "offsets",
+        discovery: str = PAPER_RULE,  # a rule of keyin.decode.registry.RULES
         teacher_keyframe_cost: float | str = 0.0,  # nats per keyframe in the teacher's DP, or "knee"
         teacher_chain: bool = False,  # teacher forcing of the previous keyframe's position (decode/teacher.py)
         teacher_leaves: bool = False,  # the teacher also says where the chain leaves the clip
@@ -74,12 +72,9 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         interpolate_from: str = "predicted",  # ours: "frames" (models/keyin.py INTERPOLATE_FROM)
     ) -> None:
         super().__init__()
-        if discovery not in KEYIN_RULES:
-            raise ValueError(f"discovery must be one of {KEYIN_RULES}, got {discovery!r}")
+        model_rule(discovery, offset_evidence)
         if isinstance(map_keyframe_cost, str) and map_keyframe_cost != KNEE:
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
-        if discovery in BOUNDARY_SCORE_RULES and not offset_evidence:
-            raise ValueError(f"discovery={discovery!r} needs offset_evidence (the boundary scores)")
         if frozen not in FROZEN_IN_STAGE2:
             raise ValueError(f"frozen must be one of {tuple(FROZEN_IN_STAGE2)}, got {frozen!r}")
         if loss_reduction not in REDUCTIONS:
@@ -174,7 +169,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             ``clips`` (3·count, L, C, H, W): per clip the ground truth, the posterior-mean
             reconstruction (argmax offsets) and a prior sample, conditioning frames first;
             ``n_cond``; ``truth`` / ``predicted``: keyframes to mark on each of those rows
-            (discovered ones on the first two, the sample's own on the third); ``offsets`` (B, M)
+            (discovered ones on the first two, the sample's own on the third); ``argmax_offsets`` (B, M)
             argmax offsets of the whole batch and ``max_offset`` S, for the histogram.
         """
         clips, lengths = batch["frames"].to(self.device), batch["future_length"].to(self.device)
@@ -189,7 +184,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             "n_cond": self.model.n_cond,
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
-            "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
+            "argmax_offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
             "max_offset": self.hparams.stage1["max_offset"],
         }
 
