@@ -48,7 +48,7 @@ from keyin.data.brownian import BrownianGenerator
 from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.decode.changepoint import ChangepointKeyframes
-from keyin.decode.rules import BOUNDARY_SCORE_RULES, SEGMENT_COST_RULES
+from keyin.decode.registry import rule_named
 from keyin.eval.f1 import keyframe_scores
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module
@@ -135,12 +135,14 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
     decode = time.perf_counter() - started
     videos, _, _ = read_videos(clip, spec, None, None, progress=False)
     discoverer = functools.partial(module.discover, discovery=rule, keyframe_cost="knee")
-    shared = shared and rule in SEGMENT_COST_RULES and module.config.frames.plain_bce  # else each window computes its own
+    reads_costs = rule_named(rule).reads_segment_costs
+    shared = shared and reads_costs and module.config.frames.plain_bce  # else each window computes its own
     folder = out / label / f"{rule}-{shared}"
     with timed_parts() as parts:
         video_costs = module.video_costs if shared else None  # the timed method
         started = time.perf_counter()
-        segments = module.map_pruned_segments if shared and rule == "map_pruned" else None
+        segments = (functools.partial(module.kept_segments, discovery=rule)
+                    if shared and rule_named(rule).prunes_segments else None)
         summary = discover_videos(videos, discoverer, module.keyframe_probabilities, folder, {}, n_cond,
                                   n_future, 1, n_future // 2, progress=False, video_costs=video_costs, segments=segments)
         total = time.perf_counter() - started
@@ -149,7 +151,7 @@ def run(module, label: str, rule: str, clip: Path, movie: Path, turns: list[int]
     inside = [t for t in turns if n_cond <= t < len(videos[0].frames) - 1]
     scores = keyframe_scores([found], [inside], len(videos[0].frames))
     parts = dict(parts, decode=decode, rest=total - sum(parts.values()))
-    name = f"{label}, {rule}" + (" per window" if rule in SEGMENT_COST_RULES and not shared else "")
+    name = f"{label}, {rule}" + (" per window" if reads_costs and not shared else "")
     return dict(label=name, keyframes=found, frames=summary["kept_frames"], windows=summary["windows"], total=total, parts=parts,
                 found=len(found), turns=len(inside), f1=scores["f1"], f1_tol1=scores["f1_tol1"])
 
@@ -213,8 +215,9 @@ def main() -> None:
         baseline = changepoint_row(clip, turns, args.clip)
         results = [(run(module, label, rule, clip, movie, turns, Path(tmp), shared), scored)
                    for label, module, scored in models for rule in args.rules
-                   for shared in ((True, False) if args.per_window and rule in SEGMENT_COST_RULES and module.config.frames.plain_bce else (True,))
-                   if rule not in BOUNDARY_SCORE_RULES or module.config.predictor.offset_evidence]
+                   for shared in ((True, False) if args.per_window and rule_named(rule).reads_segment_costs
+                                  and module.config.frames.plain_bce else (True,))
+                   if rule_named(rule).runs_on(module.config.predictor.offset_evidence)]
     for (shared, _), (alone, _) in zip(results, results[1:]):
         if alone["label"] == shared["label"] + " per window" and alone["keyframes"] != shared["keyframes"]:
             raise SystemExit(f"{shared['label']}: the shared segment costs found other keyframes than the per-window ones")

@@ -10,7 +10,8 @@ from typing import Any, Mapping
 import torch
 
 from keyin.errors import CheckpointError
-from keyin.lit.legacy import current_model_name, upgrade_keyframe_hparams, upgrade_state_dict
+from keyin.decode.flat_hparams import upgrade_keyframe_hparams
+from keyin.lit.legacy import current_model_name, upgrade_state_dict
 from keyin.models.config import KEYINConfig
 from keyin.models.keyin import STAGE1
 from keyin.models.state import sub_state_dict

@@ -25,7 +25,7 @@ import keyin.decode.segment_costs
 import keyin.lit.frame_autoencoder
 import keyin.lit.interpolator
 from keyin.data.imports import ImportSpec, read_videos
-from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES, SEGMENT_COST_RULES
+from keyin.decode.registry import RULES, rule_named
 from keyin.decode.rules import SegmentationDiscoverer
 from keyin.decode.trained import TrainedKeyframes
 from keyin.envs.segmentation import PUCK_RGB
@@ -119,13 +119,13 @@ def test_keyin_train_scores_the_test_split_on_the_gpu(tmp_path, name):
 
 
 def rule_discoverers() -> dict[str, tuple[str, Callable]]:
-    """Test id -> (model, discoverer of a module): every rule of KEYIN_RULES on each stage 2 that
+    """Test id -> (model, discoverer of a module): every rule of the registry on each stage 2 that
     has what it reads, map at the knee price, Surprise at both shifts, and stage 1's exact segmentation."""
     found = {}
     for name in STAGE2:
         evidence = name == "keyin_plus"
-        for rule in KEYIN_RULES:
-            if evidence or rule not in BOUNDARY_SCORE_RULES:
+        for rule, decoding in RULES.items():
+            if decoding.runs_on(evidence):
                 found[f"{name}-{rule}"] = (name, lambda m, rule=rule: functools.partial(m.discover, discovery=rule))
     found["keyin_plus-map-knee"] = ("keyin_plus", lambda m: functools.partial(m.discover, discovery="map",
                                                                                keyframe_cost="knee"))
@@ -167,8 +167,8 @@ def test_keyin_discover_finds_a_videos_keyframes_on_the_gpu_without_lightning(tm
     def keyframes() -> list:
         return discover_video(
             video, functools.partial(model.discover, discovery=rule, keyframe_cost=5.0), model.keyframe_probabilities,
-            N_COND, N_FUTURE, 1, batch_size=4, video_costs=model.video_costs if rule in SEGMENT_COST_RULES else None,
-            segments=model.map_pruned_segments if rule == "map_pruned" else None,
+            N_COND, N_FUTURE, 1, batch_size=4, video_costs=model.video_costs if rule_named(rule).reads_segment_costs else None,
+            segments=functools.partial(model.kept_segments, discovery=rule) if rule_named(rule).prunes_segments else None,
         )
 
     on_cpu = keyframes()

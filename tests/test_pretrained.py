@@ -153,3 +153,26 @@ def test_rules_refuses_scores_of_the_test_split(shipped, tmp_path, monkeypatch):
                                      "--folder", str(tmp_path)])
     with pytest.raises(SystemExit, match="scored ckpt=pretrained:smoke on split=test; record the rule from"):
         main()
+
+
+# keyin-discover's keyframes of the bundled example video by each shipped model at rule=auto (its recorded
+# default rule), as they were before the rules became objects (issue 59; 2026-12-06, float32 on the CPU).
+EXAMPLE_KEYFRAMES = {
+    "brownian": ("map_pruned", [6, 12, 19, 26, 33, 39, 45, 51, 59, 67, 73, 79, 85, 93, 101, 109, 115, 123, 130, 137, 145,
+                                151, 157, 165, 174, 179, 186, 194]),
+    "pushing": ("boundaries", [6, 11, 17, 23, 27, 33, 39, 45, 51, 53, 59, 65, 70, 74, 79, 84, 90, 96, 101, 107, 112, 118,
+                               124, 130, 134, 138, 147, 152, 157, 162, 167, 171, 174, 179, 184, 190, 196]),
+    "metaworld": ("map", [1, 11, 24, 26, 31, 35, 47, 55, 59, 70, 76, 81, 86, 97, 108, 111, 118, 121, 127, 133, 142, 144,
+                          153, 161, 172, 181, 188, 192]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(EXAMPLE_KEYFRAMES))
+def test_each_shipped_model_finds_its_recorded_keyframes_of_the_example_video(name, tmp_path):
+    from keyin.cli.pretrained import EXAMPLE
+
+    result = run("discover", f"ckpt={pretrained.PREFIX}{name}", f"input={pretrained.FOLDER / EXAMPLE}", "rule=auto",
+                 "pictures=false", "progress=false", "device=cpu", "hydra.run.dir=out", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((tmp_path / "out" / EXAMPLE / "keyframes.json").read_text())
+    assert (record["model"]["rule"], [keyframe["frame"] for keyframe in record["keyframes"]]) == EXAMPLE_KEYFRAMES[name]

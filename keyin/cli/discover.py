@@ -13,7 +13,8 @@ from omegaconf import DictConfig
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import optional_name, require_int_at_least, require_positive_int
-from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES, KNEE, SEGMENT_COST_RULES
+from keyin.decode.prices import KNEE
+from keyin.decode.registry import EXACT_RULE, PAPER_RULE, RULES, rule_named
 from keyin.errors import ConfigError, DatasetFormatError
 
 if TYPE_CHECKING:  # torch, the model and the video readers are imported when the command runs: --help answers at once
@@ -22,7 +23,7 @@ if TYPE_CHECKING:  # torch, the model and the video readers are imported when th
 BATCH_SIZES = {"cpu": 32, "gpu": 256}  # batch_size=null: windows per model call on each kind of device
 
 
-AUTO = "auto"  # rule=auto: a shipped model's recorded default rule, else map
+AUTO = "auto"  # rule=auto: a shipped model's recorded default rule, else the exact rule (keyin.decode.registry.EXACT_RULE)
 
 
 def check_discover(cfg: DictConfig) -> None:
@@ -32,8 +33,8 @@ def check_discover(cfg: DictConfig) -> None:
                                 ".hdf5 or a LeRobot v2 folder")):
         if cfg[key] is None:
             raise ConfigError(f"{key}= is required: {what}")
-    if cfg.rule not in (None, AUTO, *KEYIN_RULES):
-        raise ConfigError(f"rule={cfg.rule} is not a rule of KEYIN; choose one of {', '.join(KEYIN_RULES)}, {AUTO} or null")
+    if cfg.rule not in (None, AUTO, *RULES):
+        raise ConfigError(f"rule={cfg.rule} is not a rule of KEYIN; choose one of {', '.join(RULES)}, {AUTO} or null")
     cost = cfg.keyframe_cost
     nats = isinstance(cost, (int, float)) and not isinstance(cost, bool) and cost >= 0
     if cost is not None and cost != KNEE and not nats:
@@ -91,33 +92,34 @@ def read_input(cfg: DictConfig, spec: ImportSpec) -> list[ImportedVideo]:
 
 def chosen_rule(cfg: DictConfig, module: Any) -> str:
     """``rule=``, where ``auto`` is a shipped model's recorded default (the cheapest rule within 0.01
-    of ``map`` on its validation clips, said on stderr) and otherwise ``map``; null: the model's own."""
+    of the exact rule ``map`` on its validation clips, said on stderr) and otherwise the exact rule; null:
+    the model's own."""
     from keyin.pretrained import recorded_rule
 
     if cfg.rule != AUTO:
         return cfg.rule or module.hparams.discovery
     recorded = recorded_rule(cfg.ckpt)
     if recorded is None:
-        return "map"
-    if recorded["rule"] != "map":
+        return EXACT_RULE
+    if recorded["rule"] != EXACT_RULE:
         scores = ", ".join(f"{rule} {f1:.3f}" for rule, f1 in recorded["val_f1_interior"].items())
         print(f"note: rule={recorded['rule']}, {cfg.ckpt}'s recorded default: the cheapest rule within "
-              f"{recorded['tolerance']} of map's interior F1 on {recorded['val_clips']} validation clips ({scores}); "
-              f"rule=map for the exact segmentation", file=sys.stderr)
+              f"{recorded['tolerance']} of {EXACT_RULE}'s interior F1 on {recorded['val_clips']} validation clips "
+              f"({scores}); rule={EXACT_RULE} for the exact segmentation", file=sys.stderr)
     return recorded["rule"]
 
 
 def model_record(cfg: DictConfig, module: Any, trained: Mapping[str, Any]) -> dict[str, Any]:
     """What keyframes.json says about the model and its rule."""
     sizes = module.config.stage1_hparams()
-    rule = chosen_rule(cfg, module)
-    if rule in BOUNDARY_SCORE_RULES and not module.config.predictor.offset_evidence:
-        raise ConfigError(f"rule={rule} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
-                          f"has not; pass rule=map or rule=offsets")
-    cost = module.hparams.map_keyframe_cost if cfg.keyframe_cost is None else cfg.keyframe_cost
-    return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule,
-            "keyframe_cost": cost if rule in ("map", "map_pruned") else None,
-            "candidate_logit": module.hparams.map_candidate_logit if rule == "map_pruned" else None,
+    rule = rule_named(chosen_rule(cfg, module))
+    if not rule.runs_on(module.config.predictor.offset_evidence):
+        raise ConfigError(f"rule={rule.name} needs a model with offset evidence (model=keyin_plus), which {cfg.ckpt} "
+                          f"has not; pass rule={EXACT_RULE} or rule={PAPER_RULE}")
+    prices = module.prices(cfg.keyframe_cost, None if cfg.candidate_logit is None else float(cfg.candidate_logit))
+    return {"checkpoint": str(Path(cfg.ckpt).resolve()), "method": trained["model"]["name"], "rule": rule.name,
+            "keyframe_cost": prices.keyframe_cost if rule.reads_segment_costs else None,
+            "candidate_logit": prices.candidate_logit if rule.prunes_segments else None,
             **{key: sizes[key] for key in ("image_size", "channels", "n_cond", "n_future")}}
 
 
@@ -131,9 +133,8 @@ def discover(cfg: DictConfig) -> dict:
 
     device = choose_device(cfg.device)
     module, trained = load_trained_module(cfg.ckpt, stage="keyframes", device=device)
-    if cfg.candidate_logit is not None:  # rule=map_pruned reads it from the module
-        module.hparams.map_candidate_logit = float(cfg.candidate_logit)
     model = model_record(cfg, module, trained)
+    rule = rule_named(model["rule"])
     if cfg.compile:
         from keyin.lit.run import compile_frame_networks  # Lightning, only for this
 
@@ -146,12 +147,14 @@ def discover(cfg: DictConfig) -> dict:
     videos = read_input(cfg, spec)
     batch_size = batch_size_on(device, cfg.batch_size, **BATCH_SIZES)
     ran = {**device_record(device), "batch_size": batch_size}
-    discoverer = functools.partial(module.discover, discovery=model["rule"], keyframe_cost=model["keyframe_cost"])
+    discoverer = functools.partial(module.discover, discovery=rule.name, keyframe_cost=model["keyframe_cost"],
+                                   candidate_logit=model["candidate_logit"])
     summary = discover_videos(
         videos, discoverer, module.keyframe_probabilities, run_dir(), {**model, **ran}, n_cond, n_future,
         cfg.frame_stride, stride, seam=cfg.seam, batch_size=batch_size, progress=cfg.progress,
-        pictures=bool(cfg.pictures), video_costs=module.video_costs if model["rule"] in SEGMENT_COST_RULES else None,
-        segments=module.map_pruned_segments if model["rule"] == "map_pruned" and module.config.frames.plain_bce else None,
+        pictures=bool(cfg.pictures), video_costs=module.video_costs if rule.reads_segment_costs else None,
+        segments=functools.partial(module.kept_segments, discovery=rule.name, candidate_logit=model["candidate_logit"])
+        if rule.prunes_segments and module.config.frames.plain_bce else None,
     )
     summary.update(rule=model["rule"], keyframe_cost=model["keyframe_cost"], method=model["method"], **ran)
     write_metrics(summary, run_dir())

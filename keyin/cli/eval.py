@@ -107,6 +107,7 @@ def evaluate(cfg: DictConfig) -> dict:
 
     device = choose_device(cfg.device)
     if cfg.ckpt is not None:
+        from keyin.decode.registry import Segmentation
         from keyin.decode.rules import SegmentationDiscoverer
         from keyin.lit.registry import load_trained_module
 
@@ -116,7 +117,7 @@ def evaluate(cfg: DictConfig) -> dict:
         name = trained["model"]["name"]
         if module.stage == "interpolator":  # exact best segmentation under the interpolator
             n_keyframes = trained["dataset"]["n_keyframes"]
-            discoverers = {f"{name}_segmentation": SegmentationDiscoverer(module, n_keyframes)}
+            discoverers = {f"{name}_{Segmentation.name}": SegmentationDiscoverer(module, n_keyframes)}
         else:
             try:
                 discoverers = module.discoverers(name, rules)

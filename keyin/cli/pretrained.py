@@ -22,7 +22,7 @@ from keyin.data.brownian import BrownianGenerator
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 from keyin.lit.checkpoints import load_checkpoint
-from keyin.decode.rules import FAST_RULE_TOLERANCE, fastest_rule
+from keyin.decode.registry import FAST_RULE_TOLERANCE, fastest_rule
 from keyin.pretrained import FOLDER, PREFIX, annotate, export
 
 EXAMPLE = "brownian_example.gif"  # 200 frames of Structured Brownian motion, 10 frames per second

@@ -4,7 +4,7 @@ A rule is called like every discoverer, ``rule(clips, future_length)`` with clip
 in [0, 1] and (B,) valid future frames, and returns per clip the future positions it marks,
 inside the clip's valid frames: Random and Constant (:mod:`keyin.decode.baselines`), the paper's
 argmax offsets (:mod:`keyin.decode.offsets`), surprise peaks (:mod:`keyin.decode.surprise`), and
-the rules on the exact segmentation — the stage-1 gate, ``boundaries`` and ``map``
-(:mod:`keyin.decode.rules` over :mod:`keyin.decode.segmentation` and
-:mod:`keyin.decode.segment_costs`). Scoring them is :mod:`keyin.eval`'s job.
+KEYIN's rules on a trained model as objects that say what they read (:mod:`keyin.decode.registry`),
+the rules on the exact segmentation under them and the stage-1 gate (:mod:`keyin.decode.rules` over
+:mod:`keyin.decode.segmentation` and :mod:`keyin.decode.segment_costs`). Scoring them is :mod:`keyin.eval`'s job.
 """

@@ -14,7 +14,7 @@ from typing import Callable
 import torch
 from torch import Tensor
 
-from keyin.decode.names import KNEE
+from keyin.decode.prices import KNEE
 from keyin.losses.soft_keyframe import IGNORE_OFFSET
 
 

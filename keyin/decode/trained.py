@@ -14,12 +14,13 @@ from typing import Any, Callable, Sequence
 import torch
 from torch import nn
 
-from keyin.decode.names import BOUNDARY_SCORE_RULES, VARIANT_RULES
-from keyin.decode.rules import keyin_keyframe_probabilities, keyin_keyframes, map_pruned_segments
+from keyin.decode.prices import Prices
+from keyin.decode.registry import RULES, model_rule, rule_named
+from keyin.decode.rules import keyin_keyframe_probabilities
 from keyin.decode.segment_costs import video_interpolation_costs
 from keyin.decode.segmentation import KeyframeCost
 from keyin.models.modes import evaluating
-from keyin.lit.legacy import upgrade_keyframe_hparams
+from keyin.decode.flat_hparams import upgrade_keyframe_hparams
 from keyin.losses.image import changed_pixel_weights, future_pixel_weights
 from keyin.models import KEYIN
 from keyin.models.config import KEYINConfig
@@ -51,6 +52,13 @@ class KeyframeRules:
         frames = self.config.frames
         return changed_pixel_weights(clips, frames.foreground_weight, frames.foreground_threshold)
 
+    def prices(self, keyframe_cost: KeyframeCost | None = None, candidate_logit: float | None = None) -> Prices:
+        """The module's ``map_keyframe_cost``, ``map_boundary_weight`` and ``map_candidate_logit``, the
+        price and the candidates' least logit replaced where given."""
+        hp = self.hparams
+        return Prices(hp.map_keyframe_cost if keyframe_cost is None else keyframe_cost, hp.map_boundary_weight,
+                      hp.map_candidate_logit if candidate_logit is None else candidate_logit)
+
     @torch.no_grad()
     def discover(
         self,
@@ -59,28 +67,28 @@ class KeyframeRules:
         discovery: str | None = None,
         keyframe_cost: KeyframeCost | None = None,
         costs: torch.Tensor | None = None,
+        candidate_logit: float | None = None,
     ) -> list[list[int]]:
-        """Keyframe positions by a rule of :func:`keyin.decode.rules.keyin_keyframes` ("offsets",
-        "boundaries", "map", "map_pruned" or "segmentation"; default: the module's ``discovery``), inside
-        each clip; "map", "map_pruned" and "segmentation" price a keyframe at ``keyframe_cost`` (default: the module's
-        ``map_keyframe_cost``) and take the segments' (B, N, S) BCE from ``costs`` where given."""
+        """Keyframe positions inside each of (B, L, C, H, W) clips by a rule of
+        :data:`keyin.decode.registry.RULES` (default: the module's ``discovery``) at :meth:`prices`;
+        a rule that reads segment costs takes the segments' (B, N, S) BCE from ``costs`` where given."""
         clips = clips.to(self.device)
-        price = self.hparams.map_keyframe_cost if keyframe_cost is None else keyframe_cost
         with evaluating(self):
-            return keyin_keyframes(
-                self.model, clips, future_length.to(self.device), discovery or self.hparams.discovery,
-                price, self.hparams.map_boundary_weight,
+            return rule_named(discovery or self.hparams.discovery)(
+                self.model, clips, future_length.to(self.device), self.prices(keyframe_cost, candidate_logit),
                 future_pixel_weights(self.pixel_weights(clips), self.model.n_cond), costs,
-                self.hparams.map_candidate_logit,
             )
 
     @torch.no_grad()
-    def map_pruned_segments(self, clips: torch.Tensor, future_length: torch.Tensor) -> torch.Tensor:
-        """(B, N, S) the segments ``map_pruned`` prices in each of (B, L, C, H, W) clips
-        (:func:`keyin.decode.rules.map_pruned_segments`)."""
+    def kept_segments(
+        self, clips: torch.Tensor, future_length: torch.Tensor, discovery: str, candidate_logit: float | None = None
+    ) -> torch.Tensor | None:
+        """(B, N, S) bool, the segments a rule prices in each of (B, L, C, H, W) clips, None for all
+        (:meth:`keyin.decode.registry.Rule.kept_segments`)."""
+        rule = rule_named(discovery)
         with evaluating(self):
-            return map_pruned_segments(self.model, clips.to(self.device), future_length.to(self.device),
-                                       self.hparams.map_candidate_logit)
+            read = rule.read(self.model, clips.to(self.device), future_length.to(self.device))
+            return rule.kept_segments(read, self.prices(candidate_logit=candidate_logit))
 
     @torch.no_grad()
     def video_costs(self, frames: torch.Tensor, keep: torch.Tensor | None = None, block: int = 256) -> torch.Tensor | None:
@@ -114,21 +122,20 @@ class KeyframeRules:
 
     def discoverers(self, name: str, rules: Sequence[str] | None = None) -> dict[str, Callable]:
         """The discovery rules to score, by method name: the configured one (named ``name``) first;
-        with offset evidence also the other :data:`VARIANT_RULES`, as ``<name>_<rule>``. ``rules``
-        picks among those, "map_pruned" (with offset evidence) and "segmentation" (any model: stage 1's
-        segmentation at the same price)."""
-        scored = [self.hparams.discovery]
-        if self.config.predictor.offset_evidence:
-            scored += [rule for rule in VARIANT_RULES if rule != self.hparams.discovery]
+        with offset evidence also the other variants of :data:`keyin.decode.registry.RULES`, as
+        ``<name>_<rule>``. ``rules`` picks among those and the other rules the model has what they
+        read for (with offset evidence ``map_pruned``; any model: stage 1's ``segmentation`` at the same price)."""
+        own, evidence = rule_named(self.hparams.discovery), self.config.predictor.offset_evidence
+        scored = [own] + [rule for rule in RULES.values() if evidence and rule.variant and rule is not own]
         if rules is not None:
-            extra = ("map_pruned", "segmentation") if self.config.predictor.offset_evidence else ("segmentation",)
-            choosable = scored + [rule for rule in extra if rule not in scored]
-            unknown = [rule for rule in rules if rule not in choosable]
+            choosable = scored + [rule for rule in RULES.values()
+                                  if not rule.variant and rule.runs_on(evidence) and rule not in scored]
+            unknown = [asked for asked in rules if asked not in [rule.name for rule in choosable]]
             if unknown:
-                raise ValueError(f"this model discovers by {choosable}, not {unknown}")
-            scored = [rule for rule in choosable if rule in rules]
+                raise ValueError(f"this model discovers by {[rule.name for rule in choosable]}, not {unknown}")
+            scored = [rule for rule in choosable if rule.name in rules]
         return {
-            name if rule == self.hparams.discovery else f"{name}_{rule}": functools.partial(self.discover, discovery=rule)
+            name if rule is own else f"{name}_{rule.name}": functools.partial(self.discover, discovery=rule.name)
             for rule in scored
         }
 
@@ -139,7 +146,7 @@ class TrainedKeyframes(KeyframeRules, nn.Module):
 
     Args:
         hparams: the checkpoint's ``hyper_parameters`` (those of a checkpoint saved before the typed
-            configs upgraded: :func:`keyin.lit.legacy.upgrade_keyframe_hparams`).
+            configs upgraded: :func:`keyin.decode.flat_hparams.upgrade_keyframe_hparams`).
     """
 
     stage = "keyframes"
@@ -148,8 +155,7 @@ class TrainedKeyframes(KeyframeRules, nn.Module):
         super().__init__()
         hparams = upgrade_keyframe_hparams(hparams)
         self.config = KEYINConfig.from_dict(hparams["net"])
-        if hparams["discovery"] in BOUNDARY_SCORE_RULES and not self.config.predictor.offset_evidence:
-            raise ValueError(f"discovery={hparams['discovery']!r} needs offset_evidence (the boundary scores)")
+        model_rule(hparams["discovery"], self.config.predictor.offset_evidence)
         object.__setattr__(self, "hparams", Hyperparameters(hparams))
         self.model = KEYIN.from_config(self.config)
 

@@ -15,13 +15,13 @@ from typing import Any, Mapping
 import lightning as L
 import torch
 
-from keyin.decode.names import BOUNDARY_SCORE_RULES, KEYIN_RULES
-from keyin.decode.rules import MAP_CANDIDATE_LOGIT
-from keyin.decode.segmentation import KNEE
+from keyin.decode.prices import KNEE, MAP_CANDIDATE_LOGIT
+from keyin.decode.registry import PAPER_RULE, model_rule
 from keyin.decode.teacher import TeacherConfig, teacher_loss
 from keyin.decode.trained import KeyframeRules
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.lit.legacy import typed_keyframe_arguments, upgrade_keyframe_hparams, upgrade_state_dict
+from keyin.decode.flat_hparams import typed_keyframe_arguments, upgrade_keyframe_hparams
+from keyin.lit.legacy import upgrade_state_dict
 from keyin.models.modes import evaluating
 from keyin.losses.image import future_pixel_weights
 from keyin.losses.soft_keyframe import SoftLossConfig, keyin_loss, offset_entropy
@@ -45,7 +45,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         loss: SoftLossConfig | Mapping[str, Any],
         optimizer: OptimizerPartial | Mapping[str, Any],
         teacher: TeacherConfig | Mapping[str, Any] | None = None,  # ours, off by default (docs/decisions.md)
-        discovery: str = "offsets",
+        discovery: str = PAPER_RULE,  # a rule of keyin.decode.registry.RULES
         map_keyframe_cost: float | str = 120.0,  # nats per keyframe, or "knee" (label-free)
         map_boundary_weight: float = 10.0,
         map_candidate_logit: float = MAP_CANDIDATE_LOGIT,  # discovery=map_pruned: a keyframe's least boundary logit
@@ -65,12 +65,9 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         self.config = net if isinstance(net, KEYINConfig) else KEYINConfig.from_dict(net)
         self.loss = loss if isinstance(loss, SoftLossConfig) else SoftLossConfig(**loss)
         self.teacher = teacher if isinstance(teacher, TeacherConfig) else TeacherConfig(**(teacher or {}))
-        if discovery not in KEYIN_RULES:
-            raise ValueError(f"discovery must be one of {KEYIN_RULES}, got {discovery!r}")
+        model_rule(discovery, self.config.predictor.offset_evidence)
         if isinstance(map_keyframe_cost, str) and map_keyframe_cost != KNEE:
             raise ValueError(f"map_keyframe_cost must be nats per keyframe or {KNEE!r}, got {map_keyframe_cost!r}")
-        if discovery in BOUNDARY_SCORE_RULES and not self.config.predictor.offset_evidence:
-            raise ValueError(f"discovery={discovery!r} needs offset_evidence (the boundary scores)")
         if frozen not in FROZEN_IN_STAGE2:
             raise ValueError(f"frozen must be one of {tuple(FROZEN_IN_STAGE2)}, got {frozen!r}")
         # the checkpoint keeps plain dicts (weights_only loading), load_from_checkpoint rebuilds the configs
@@ -88,13 +85,13 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
     def from_flat(cls, **flat: Any) -> "KeyframeModule":
         """The module of flat stage-2 hyper-parameters: ``model.keyframes`` of conf/model/keyin.yaml (the
         keys users override) with the stage-1 module's hyper-parameters as ``stage1``
-        (:func:`keyin.lit.legacy.typed_keyframe_arguments`)."""
+        (:func:`keyin.decode.flat_hparams.typed_keyframe_arguments`)."""
         return cls(**typed_keyframe_arguments(flat))
 
     @classmethod
     def load_from_checkpoint(cls, checkpoint_path: str | Path, *args: Any, **kwargs: Any) -> "KeyframeModule":
         """Lightning's, with the flat hyper-parameters of a checkpoint saved before the typed configs
-        upgraded (:func:`keyin.lit.legacy.upgrade_keyframe_hparams`)."""
+        upgraded (:func:`keyin.decode.flat_hparams.upgrade_keyframe_hparams`)."""
         saved = torch.load(checkpoint_path, map_location="cpu", weights_only=True)["hyper_parameters"]
         return super().load_from_checkpoint(checkpoint_path, *args, **{**upgrade_keyframe_hparams(saved), **kwargs})
 
@@ -178,7 +175,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             ``clips`` (3·count, L, C, H, W): per clip the ground truth, the posterior-mean
             reconstruction (argmax offsets) and a prior sample, conditioning frames first;
             ``n_cond``; ``truth`` / ``predicted``: keyframes to mark on each of those rows
-            (discovered ones on the first two, the sample's own on the third); ``offsets`` (B, M)
+            (discovered ones on the first two, the sample's own on the third); ``argmax_offsets`` (B, M)
             argmax offsets of the whole batch and ``max_offset`` S, for the histogram.
         """
         clips, lengths = batch["frames"].to(self.device), batch["future_length"].to(self.device)
@@ -193,7 +190,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             "n_cond": self.model.n_cond,
             "truth": [marks for k in range(len(truth)) for marks in (truth[k], truth[k], [])],
             "predicted": [marks for k in range(len(truth)) for marks in (discovered[k], discovered[k], sampled[k])],
-            "offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
+            "argmax_offsets": (posterior["offset_probs"].argmax(-1) + 1).cpu(),
             "max_offset": self.config.max_offset,
         }
 

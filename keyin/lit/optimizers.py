@@ -13,8 +13,9 @@ from typing import Any, Callable, Iterable, Mapping
 import torch
 from torch import nn
 
+from keyin.models.config import PAPER_BETAS
+
 OptimizerPartial = Callable[[Iterable[nn.Parameter]], torch.optim.Optimizer]
-PAPER_BETAS = (0.9, 0.999)
 
 
 def adam(module: nn.Module, lr: float) -> torch.optim.Adam:
@@ -25,11 +26,6 @@ def adam(module: nn.Module, lr: float) -> torch.optim.Adam:
 def trained_parameters(module: nn.Module) -> list[nn.Parameter]:
     """The parameters of ``module`` that train (frozen networks left out)."""
     return [p for p in module.parameters() if p.requires_grad]
-
-
-def adam_spec(lr: float) -> dict[str, Any]:
-    """The paper's Adam at ``lr`` as an optimizer spec."""
-    return {"_target_": "torch.optim.Adam", "_partial_": True, "lr": lr, "betas": list(PAPER_BETAS)}
 
 
 def optimizer_spec(optimizer: OptimizerPartial | Mapping[str, Any]) -> dict[str, Any]:

@@ -44,10 +44,10 @@ class ValidationPictures(L.Callback):
             self.folder, shown["clips"], shown["n_cond"], shown["truth"], shown["predicted"], name=f"val_step{step:06d}"
         )
         log_picture(trainer.loggers, "val/videos", videos, step)
-        if "offsets" in shown:
+        if "argmax_offsets" in shown:
             histogram = save_offset_histogram(
-                shown["offsets"], shown["max_offset"], self.folder / f"offsets_step{step:06d}.png",
-                title=f"argmax offsets on {len(shown['offsets'])} validation clips, step {step}",
+                shown["argmax_offsets"], shown["max_offset"], self.folder / f"offsets_step{step:06d}.png",
+                title=f"argmax offsets on {len(shown['argmax_offsets'])} validation clips, step {step}",
             )
             log_picture(trainer.loggers, "val/offsets", histogram, step)
         if "surprise" in shown:

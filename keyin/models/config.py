@@ -9,6 +9,12 @@ from dataclasses import dataclass
 from typing import Any, Mapping, TypeVar
 
 Config = TypeVar("Config")
+PAPER_BETAS = (0.9, 0.999)  # Adam's β1, β2 (paper section 4)
+
+
+def adam_spec(lr: float) -> dict[str, Any]:
+    """The paper's Adam at ``lr`` as an optimizer spec (:func:`keyin.lit.optimizers.optimizer_partial` builds it)."""
+    return {"_target_": "torch.optim.Adam", "_partial_": True, "lr": lr, "betas": list(PAPER_BETAS)}
 
 
 def picked(cls: type[Config], values: Mapping[str, Any]) -> Config:
@@ -45,7 +51,7 @@ class InterpolatorConfig:
     lstm_hidden: int
     lstm_layers: int
     mlp_hidden: int
-    step_input: str = "boundaries"
+    step_input: str = "boundaries"  # keyin.models.interpolator.STEP_INPUTS (stage 1's, no decoding rule)
 
 
 @dataclass(frozen=True)

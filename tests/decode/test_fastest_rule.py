@@ -1,9 +1,9 @@
 """The recorded choice of keyin-discover's default rule: the cheapest rule within 0.01 of map's
-validation F1 (keyin.decode.rules.fastest_rule), known answers."""
+validation F1 (keyin.decode.registry.fastest_rule), known answers."""
 
 import pytest
 
-from keyin.decode.rules import fastest_rule
+from keyin.decode.registry import fastest_rule
 
 
 @pytest.mark.parametrize("val_f1, chosen", [

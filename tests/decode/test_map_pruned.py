@@ -3,7 +3,8 @@
 import pytest
 import torch
 
-from keyin.decode.rules import keyin_keyframes, map_keyframes
+from keyin.decode.registry import rule_named
+from keyin.decode.rules import map_keyframes
 from keyin.decode.segment_costs import candidate_segments, interpolation_costs
 from keyin.models import ConvDecoder, Interpolator
 from tests.decode.enumeration import cheapest_keyframes, keyframe_sets, random_map_inputs
@@ -85,7 +86,7 @@ def test_map_pruned_needs_boundary_scores_and_keeps_maps_keyframes_when_every_fr
     clips, lengths = torch.rand(4, 7, 3, 16, 16), torch.tensor([6, 6, 4, 6])
     plain = keyframe_module().eval()
     with pytest.raises(ValueError, match="boundary scores"):
-        keyin_keyframes(plain.model, clips, lengths, "map_pruned")
+        rule_named("map_pruned")(plain.model, clips, lengths)
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(discovery="map_pruned")
     module = keyframe_module(offset_evidence=True, discovery="map_pruned").eval()

@@ -28,14 +28,14 @@ def test_the_argmax_decides_where_mass_is_spread():
 
 
 def test_keyins_offsets_rule_reads_the_evidence_along_its_own_argmax_path():
-    from keyin.decode.rules import keyin_keyframes
+    from keyin.decode.registry import rule_named
     from tests.planning.trained_models import keyframe_module
 
     model = keyframe_module(offset_evidence=True).model.eval()
     with torch.no_grad():
         model.predictor.boundary_head.bias.fill_(0.5)  # evidence that differs between the chains
         clips, lengths = torch.rand(4, 7, 3, 16, 16), torch.tensor([6, 6, 5, 6])
-        found = keyin_keyframes(model, clips, lengths, "offsets")
+        found = rule_named("offsets")(model, clips, lengths)
         _, argmax = model.keyframes(clips, lengths, sample=False, chain="argmax")
         _, soft = model.keyframes(clips, lengths, sample=False, chain="soft")
     assert found == offset_keyframes(argmax.offset_probs, lengths)

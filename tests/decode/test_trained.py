@@ -8,14 +8,14 @@ import torch
 from keyin.decode.teacher import TeacherConfig
 from keyin.decode.trained import TrainedKeyframes
 from keyin.lit.keyframes import KeyframeModule
-from keyin.lit.legacy import typed_keyframe_arguments
+from keyin.decode.flat_hparams import typed_keyframe_arguments
 from keyin.losses.soft_keyframe import SoftLossConfig
 from keyin.models.config import KEYINConfig, PredictorConfig
 from tests.lit.tiny_models import batch, stage1, stage2
 
 
 def test_a_flat_checkpoint_without_the_later_options_upgrades_to_the_typed_defaults():
-    """The flat hyper-parameters' defaults (keyin.lit.legacy.FLAT_DEFAULTS, for checkpoints saved before
+    """The flat hyper-parameters' defaults (keyin.decode.flat_hparams.FLAT_DEFAULTS, for checkpoints saved before
     an option existed) are the typed module's and configs' defaults."""
     flat = dict(stage1=dict(stage1("ours").hparams), n_keyframes=2, latent_dim=2, lstm_hidden=8, lstm_layers=1,
                 attn_scale=True, offset_mode="predicted", fixed_offset=None, beta_ke=1.0, beta_ki=0.0, beta_kl=0.05,

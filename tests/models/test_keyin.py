@@ -6,7 +6,8 @@ import pytest
 import torch
 
 from keyin.decode.offsets import offset_keyframes
-from keyin.decode.rules import keyin_keyframes
+from keyin.decode.prices import Prices
+from keyin.decode.registry import rule_named
 from keyin.models import KEYIN
 from tests.lit.test_keyframe_teacher import batch, keyframe_module
 
@@ -31,7 +32,7 @@ def test_its_keyframes_are_the_ones_the_readout_and_the_decoding_layer_see():
         _, keys = keyin.keyframes(data["frames"], data["future_length"], mode="posterior", sample=False)
     torch.testing.assert_close(out["offset_probs"], keys.offset_probs)
     expected = offset_keyframes(out["offset_probs"], data["future_length"])
-    assert keyin_keyframes(keyin, data["frames"], data["future_length"], "offsets") == expected
+    assert rule_named("offsets")(keyin, data["frames"], data["future_length"]) == expected
 
 
 def test_the_argmax_video_keeps_the_conditioning_frames_and_shows_the_interpolated_ones():
@@ -63,10 +64,10 @@ def test_the_segmentation_rule_is_map_without_stage_2s_scores():
     torch.nn.init.normal_(keyin.predictor.boundary_head.weight, std=3.0, generator=torch.Generator().manual_seed(0))
     frames, lengths = data["frames"], data["future_length"]
     for cost in (0.0, 5.0):
-        segmentation = keyin_keyframes(keyin, frames, lengths, "segmentation", cost, boundary_weight=1e3)
-        assert segmentation == keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=0.0)
+        segmentation = rule_named("segmentation")(keyin, frames, lengths, Prices(cost, boundary_weight=1e3))
+        assert segmentation == rule_named("map")(keyin, frames, lengths, Prices(cost, boundary_weight=0.0))
         # the test's premise: at this weight the (non-zero) scores change the map keyframes
-        assert keyin_keyframes(keyin, frames, lengths, "map", cost, boundary_weight=1e3) != segmentation
+        assert rule_named("map")(keyin, frames, lengths, Prices(cost, boundary_weight=1e3)) != segmentation
 
 
 def test_interpolating_from_the_frames_reads_the_embeddings_delta_selects_and_leaves_the_prior_as_it_was():

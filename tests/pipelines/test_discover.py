@@ -3,6 +3,7 @@ shows that keyframes.json's frames are the original file's frames, at frame stri
 clip's known turns survive the windows' merge; a crash leaves no half-written folder."""
 
 import dataclasses
+import functools
 import json
 
 import imageio.v3 as iio
@@ -177,14 +178,15 @@ def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(t
     args = (video, discoverer, module.keyframe_probabilities, N_COND, n_future, 1)
     alone = discover_video(*args, batch_size=4)
     received.clear()
-    shared = discover_video(*args, batch_size=4, video_costs=video_costs, segments=module.map_pruned_segments)
+    segments = functools.partial(module.kept_segments, discovery="map_pruned")
+    shared = discover_video(*args, batch_size=4, video_costs=video_costs, segments=segments)
     assert len(alone) > 3 and shared == alone
     (union,) = rendered
     full = module.video_costs(torch.from_numpy(video.frames))
     assert (torch.isfinite(full) & ~union).any()  # the video's costs left segments out
     model = module.model
     for clips, lengths, costs in received:
-        keep = module.map_pruned_segments(clips, lengths)
+        keep = segments(clips, lengths)
         own = interpolation_costs(model.interpolator, model.decoder, model.encoder(clips)[:, N_COND - 1 :],
                                   clips[:, N_COND:].flatten(2))
         torch.testing.assert_close(costs[keep], own[keep])  # each window's segments are in the union, at its own costs
