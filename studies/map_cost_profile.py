@@ -22,8 +22,10 @@ import torch.nn.functional as F
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # common.py stays with the benchmarks
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
-from keyin.decode.segment_costs import _all_segments, _interpolate, _output_positions, interpolation_costs  # noqa: E402
+from keyin.data.segments import all_segments, segment_frames  # noqa: E402
+from keyin.decode.segment_costs import interpolation_costs  # noqa: E402
 from keyin.lit.registry import load_trained_module  # noqa: E402
+from keyin.models.interpolator import interpolate_segments  # noqa: E402
 
 
 def timed(step, repeats: int = 1) -> tuple[float, object]:
@@ -41,9 +43,10 @@ def profile(model: torch.nn.Module, clips: torch.Tensor) -> dict[str, float]:
     encode, emb = timed(lambda: model.encoder(clips)[:, n_cond - 1:])
     frames = clips[:, n_cond:].flatten(2)
     total, _ = timed(lambda: interpolation_costs(model.interpolator, model.decoder, emb, frames))
-    clip, start, offset = _all_segments(batch, n_future, max_offset)
-    interpolate, predicted = timed(lambda: _interpolate(model.interpolator, emb, clip, start, offset))
-    positions, valid = _output_positions(start, offset, max_offset, n_future)
+    clip, start, offset = all_segments(batch, 0, n_future, range(1, max_offset + 1))
+    interpolate, (predicted, valid, _) = timed(lambda: interpolate_segments(model.interpolator, None, emb, clip, start,
+                                                                            offset, "mean"))
+    positions = segment_frames(start, offset, max_offset)[0] - 1  # extended index k is future position k - 1
     outputs = predicted[valid]
     decode, logits = timed(lambda: torch.cat([model.decoder(part) for part in outputs.split(4096)]).flatten(1))
     rows = clip[:, None].expand_as(positions)[valid]

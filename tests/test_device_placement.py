@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import torch
 
-import keyin.decode.segment_costs
+import keyin.data.segments
 import keyin.lit.frame_autoencoder
 import keyin.lit.interpolator
 from keyin.data.imports import ImportSpec, read_videos
@@ -244,7 +244,7 @@ def test_the_check_fails_the_frame_autoencoders_draws_made_on_the_cpu(monkeypatc
 
 
 def test_the_check_fails_map_whose_segment_steps_are_made_on_the_cpu(monkeypatch):
-    monkeypatch.setattr(keyin.decode.segment_costs, "torch", TorchForgetting("arange"))
+    monkeypatch.setattr(keyin.data.segments, "torch", TorchForgetting("arange"))  # the segments' output steps
     module = MODELS["keyin_plus"]().eval()
     clips = batch(seed=2)
     with GPUCheck(), pytest.raises(DeviceMismatch, match="Expected all tensors to be on the same device"):

@@ -35,17 +35,22 @@ def partition_segments(
 
 
 def all_segments(
-    batch: int, first: int, last: int, offset: int
+    batch: int, first: int, last: int, offsets: range
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Every segment of one offset whose frames lie in [first, last], for every clip.
+    """Every segment with an offset in ``offsets`` whose frames lie in [first, last], for every clip.
+
+    The one enumeration of segments: stage 1's per-offset diagnostics (frames on the clip axis) and
+    the exact segmentation's costs (``first = 0``, ``last = N`` on the extended index) both read it.
 
     Returns:
-        clip (R,), start (R,), offset (R,) int64.
+        clip (R,), start (R,), offset (R,) int64, ordered by clip, then start, then offset.
     """
-    starts = torch.arange(first, last - offset + 1)
-    clip = torch.arange(batch).repeat_interleave(len(starts))
-    start = starts.repeat(batch)
-    return clip, start, torch.full_like(start, offset)
+    starts = torch.arange(first, last).repeat_interleave(len(offsets))
+    steps = torch.tensor(offsets).repeat(max(last - first, 0))
+    inside = starts + steps <= last
+    start, offset = starts[inside], steps[inside]
+    clip = torch.arange(batch).repeat_interleave(len(start))
+    return clip, start.repeat(batch), offset.repeat(batch)
 
 
 def segment_frames(start: torch.Tensor, offset: torch.Tensor, max_offset: int) -> tuple[torch.Tensor, torch.Tensor]:

@@ -8,34 +8,12 @@ boundary scores so that the best segmentation is their most likely boundary set.
 from __future__ import annotations
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor
 
-from keyin.decode.segmentation import count_tables, segment_starts_offsets
-
-
-def _all_segments(batch: int, n_future: int, max_offset: int, n_starts: int | None = None) -> tuple[Tensor, Tensor, Tensor]:
-    """clip, start, offset (R,) of every in-clip segment of every clip (starting before ``n_starts``)."""
-    start, offset = segment_starts_offsets(n_future, max_offset)
-    if n_starts is not None:
-        kept = start < n_starts
-        start, offset = start[kept], offset[kept]
-    clip = torch.arange(batch).repeat_interleave(len(start))
-    return clip, start.repeat(batch), offset.repeat(batch)
-
-
-def _interpolate(interpolator: torch.nn.Module, boundary_emb: Tensor, clip: Tensor, start: Tensor, offset: Tensor) -> Tensor:
-    """(R, S, E) interpolation between the true boundary embeddings, z = 0."""
-    z = boundary_emb.new_zeros(len(clip), interpolator.latent_dim)
-    onehot = F.one_hot(offset - 1, interpolator.max_offset).to(boundary_emb)
-    return interpolator(boundary_emb[clip, start], boundary_emb[clip, start + offset], onehot, z)
-
-
-def _output_positions(start: Tensor, offset: Tensor, max_offset: int, n_future: int) -> tuple[Tensor, Tensor]:
-    """Future positions ``a … a+o-1`` of each segment's outputs (R, S) and which exist (R, S)."""
-    steps = torch.arange(max_offset, device=start.device)
-    valid = steps[None, :] < offset[:, None]
-    return (start[:, None] + steps[None, :]).clamp(max=n_future - 1), valid
+from keyin.data.segments import all_segments, segment_frames
+from keyin.decode.segmentation import count_tables
+from keyin.losses.interpolation import interpolation_bce
+from keyin.models.interpolator import interpolate_segments
 
 
 @torch.no_grad()
@@ -68,22 +46,18 @@ def interpolation_costs(
     batch, n_ext, _ = boundary_emb.shape
     n_future, max_offset, device = n_ext - 1, interpolator.max_offset, boundary_emb.device
     costs = torch.full((batch, n_future, max_offset), float("inf"), device=device)
-    clip, start, offset = (index.to(device) for index in _all_segments(batch, n_future, max_offset, n_starts))
+    segments = all_segments(batch, 0, n_future, range(1, max_offset + 1))  # every in-clip segment, on the extended index
+    clip, start, offset = (index.to(device) for index in segments)
+    kept = start < (n_future if n_starts is None else n_starts)
     if keep is not None:
         if keep.dtype != torch.bool or keep.shape != costs.shape:
             raise ValueError(f"keep must be a bool mask of shape {tuple(costs.shape)}, got {keep.dtype} {tuple(keep.shape)}")
-        kept = keep.to(device)[clip, start, offset - 1]
-        clip, start, offset = clip[kept], start[kept], offset[kept]
+        kept &= keep.to(device)[clip, start, offset - 1]
+    clip, start, offset = clip[kept], start[kept], offset[kept]
     for first in range(0, len(clip), chunk):
-        c, a, o = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
-        predicted = _interpolate(interpolator, boundary_emb, c, a, o)  # (R, S, E)
-        positions, valid = _output_positions(a, o, max_offset, n_future)
-        logits = decoder(predicted[valid]).flatten(1).float()  # (V, D), float32 whatever the networks' precision
-        rows = c[:, None].expand_as(positions)[valid]
-        targets = frames[rows, positions[valid]].to(logits)
-        pixel_weights = None if weights is None else weights[rows, positions[valid]].to(logits)
-        bce = F.binary_cross_entropy_with_logits(logits, targets, pixel_weights, reduction="none").sum(1)
-        costs[c, a, o - 1] = bce.new_zeros(len(c)).index_put_((valid.nonzero()[:, 0],), bce, accumulate=True)
+        segments = clip[first : first + chunk], start[first : first + chunk], offset[first : first + chunk]
+        bce, _, _ = interpolation_bce(interpolator, None, decoder, boundary_emb, frames, weights, segments, "mean", first_frame=1)
+        costs[segments[0], segments[1], segments[2] - 1] = bce
     return costs
 
 
@@ -201,11 +175,11 @@ def embedding_costs(interpolator: torch.nn.Module, boundary_emb: Tensor) -> Tens
     """
     batch, n_ext, _ = boundary_emb.shape
     n_future, max_offset = n_ext - 1, interpolator.max_offset
-    clip, start, offset = _all_segments(batch, n_future, max_offset)
-    clip, start, offset = clip.to(boundary_emb.device), start.to(boundary_emb.device), offset.to(boundary_emb.device)
-    predicted = _interpolate(interpolator, boundary_emb, clip, start, offset)  # (R, S, E)
-    positions, valid = _output_positions(start, offset, max_offset, n_future)
-    targets = boundary_emb[clip[:, None], positions + 1]  # (R, S, E): future position p is index p + 1
+    segments = all_segments(batch, 0, n_future, range(1, max_offset + 1))
+    clip, start, offset = (index.to(boundary_emb.device) for index in segments)
+    predicted, valid, _ = interpolate_segments(interpolator, None, boundary_emb, clip, start, offset, "mean")  # (R, S, E)
+    frames, _ = segment_frames(start, offset, max_offset)
+    targets = boundary_emb[clip[:, None], frames]  # (R, S, E)
     per_segment = (((predicted - targets) ** 2).sum(-1) * valid).sum(-1)  # (R,)
     costs = boundary_emb.new_full((batch, n_future, max_offset), float("inf"))
     costs[clip, start, offset - 1] = per_segment
@@ -227,7 +201,7 @@ def boundary_segment_costs(scores: Tensor, max_offset: int) -> Tensor:
         (B, N, S) costs for :func:`best_segmentation`, ``inf`` where a segment leaves the clip.
     """
     batch, n_future = scores.shape
-    start, offset = (index.to(scores.device) for index in segment_starts_offsets(n_future, max_offset))
+    _, start, offset = (index.to(scores.device) for index in all_segments(1, 0, n_future, range(1, max_offset + 1)))
     end = start + offset  # extended index of the segment's closing boundary
     per_segment = torch.where(end < n_future, -scores[:, (end - 1).clamp(max=n_future - 1)], scores.new_zeros(()))
     costs = scores.new_full((batch, n_future, max_offset), float("inf"))

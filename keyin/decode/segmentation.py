@@ -18,19 +18,6 @@ from keyin.decode.prices import KNEE
 from keyin.losses.soft_keyframe import IGNORE_OFFSET
 
 
-def segment_starts_offsets(n_future: int, max_offset: int) -> tuple[Tensor, Tensor]:
-    """Every segment that lies inside the clip, on the extended index.
-
-    Returns:
-        start (R,), offset (R,) int64 with ``0 <= start``, ``1 <= offset <= S``,
-        ``start + offset <= N``; ordered by start, then offset.
-    """
-    start = torch.arange(n_future).repeat_interleave(max_offset)
-    offset = torch.arange(1, max_offset + 1).repeat(n_future)
-    inside = start + offset <= n_future
-    return start[inside], offset[inside]
-
-
 KeyframeCost = float | str  # nats per keyframe, or KNEE
 
 

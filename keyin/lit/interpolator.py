@@ -21,10 +21,9 @@ import torch.nn.functional as F
 from keyin.data.segments import partition_segments, valid_frames
 from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
+from keyin.losses.interpolation import autoencoding_bce, interpolation_bce, offset_contrast
 from keyin.models import InterpolatorPosterior
 from keyin.models.distributions import gaussian_kl
-from keyin.models.interpolator import interpolate_segments
 from keyin.models.config import FrameModelConfig, InterpolatorConfig, picked
 from keyin.models.keyin import stage1_networks
 from keyin.lit.optimizers import adam
@@ -123,10 +122,9 @@ class InterpolatorModule(L.LightningModule):
         """Per-segment summed BCE (R,) of the interpolated frames of ``segments`` (clip, start,
         offset, each (R,)), their frame count (R,) and the KL (R,) (zeros unless ``latent`` is
         "posterior" and the interpolator stochastic)."""
-        predicted, valid, posterior = interpolate_segments(
-            self.interpolator, self.posterior, embeddings, *segments, latent
+        bce, count, posterior = interpolation_bce(
+            self.interpolator, self.posterior, self.decoder, embeddings, clips, weights, segments, latent
         )
-        bce, count = segment_bce(self.decoder, predicted, valid, clips, weights, *segments)
         kl = gaussian_kl(*posterior) if posterior is not None else torch.zeros_like(bce)
         return bce, count, kl
 

@@ -6,7 +6,7 @@ import logging
 import math
 import warnings
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import lightning as L
 import torch
@@ -60,19 +60,25 @@ class FinalCheckpoint(L.Callback):
 FRAME_NETWORKS = ("encoder", "decoder", "interpolator")  # what the discovery rules call, frame by frame
 
 
+def compile_in_place(holder: torch.nn.Module, names: Sequence[str] | None = None) -> list[str]:
+    """Compile, in place, the networks ``names`` of ``holder`` that it has (all its child networks when
+    None) with ``nn.Module.compile``: parameter names, so checkpoints, stay the same; the compiled code is
+    built on the first call. Returns the names compiled."""
+    children = dict(holder.named_children())
+    names = list(children) if names is None else [name for name in names if name in children]
+    for name in names:
+        children[name].compile()
+    return names
+
+
 def compile_frame_networks(module: L.LightningModule) -> list[str]:
-    """Compile, in place, the frame networks of a trained module that its discovery rules call
-    (``nn.Module.compile``: parameter names, so checkpoints, stay the same); the compiled code is
-    built on the first call. Returns the names compiled.
+    """Compile the frame networks of a trained module that its discovery rules call (:data:`FRAME_NETWORKS`,
+    :func:`compile_in_place`). Returns the names compiled.
 
     Measured on one CPU thread (benchmarks/results/compile_inference.md): the decoder alone 2.1x,
     the exact segmentation end to end 1.26x, after about 40 s of compiling.
     """
-    holder = getattr(module, "model", module)
-    names = [name for name in FRAME_NETWORKS if isinstance(getattr(holder, name, None), torch.nn.Module)]
-    for name in names:
-        getattr(holder, name).compile()
-    return names
+    return compile_in_place(getattr(module, "model", module), FRAME_NETWORKS)
 
 
 def logging_interval(configured: int, max_steps: int) -> int:
@@ -108,15 +114,13 @@ def fit_stage(
     a stage that has reached ``max_steps`` already is only loaded (its file keeps its bytes and hash).
     Beside ``last.ckpt`` the stage keeps ``best.ckpt`` (:func:`stage_checkpoints`).
 
-    ``compile_networks`` compiles each of the module's networks in place with ``torch.compile``
-    (``nn.Module.compile``: parameter names, so checkpoints, stay the same).
+    ``compile_networks`` compiles each of the module's networks in place (:func:`compile_in_place`).
 
     Returns:
         The path of the stage's last checkpoint.
     """
     if compile_networks:
-        for network in module.children():
-            network.compile()
+        compile_in_place(module)
     folder = Path(run_dir) / "checkpoints" / module.stage
     last = folder / "last.ckpt"
     trainer_kwargs = dict(trainer_kwargs)

@@ -4,14 +4,14 @@ import itertools
 
 import torch
 
-from keyin.decode.segmentation import segment_starts_offsets
+from keyin.data.segments import all_segments
 
 INF = float("inf")
 
 
 def outside_the_clip(costs: torch.Tensor) -> torch.Tensor:
     """(B, N, S) costs with inf where a segment would leave the clip (start + offset > N)."""
-    start, offset = segment_starts_offsets(*costs.shape[1:])
+    _, start, offset = all_segments(1, 0, costs.shape[1], range(1, costs.shape[2] + 1))
     inside = torch.zeros(costs.shape[1:], dtype=torch.bool)
     inside[start, offset - 1] = True
     return costs.masked_fill(~inside, INF)

@@ -47,3 +47,23 @@ def test_video_costs_refuse_a_video_too_short_and_windows_outside_it():
         video_interpolation_costs(model.interpolator, model.decoder, torch.zeros(1, 8), torch.zeros(1, 768))
     with pytest.raises(ValueError, match="inside the video"):
         window_costs(torch.zeros(10, 3), torch.tensor([8]), torch.tensor([4]), 6)
+
+
+def test_a_segment_cost_is_stage_1s_interpolation_bce_at_z_0():
+    """The exact segmentation scores a segment by the path stage 1 trains (one interpolate-and-score
+    path): the costs of a batch, to the bit, against interpolation_bce on the clip axis."""
+    from keyin.data.segments import all_segments
+    from keyin.decode.segment_costs import interpolation_costs
+    from keyin.losses.interpolation import interpolation_bce
+    from tests.decode.enumeration import random_map_inputs
+
+    interpolator, decoder, boundary_emb, frames, _ = random_map_inputs(2, 7, 3, seed=4)
+    weights = torch.rand(frames.shape, generator=torch.Generator().manual_seed(4)) + 0.5
+    costs = interpolation_costs(interpolator, decoder, boundary_emb, frames, weights)
+    clip_frames = torch.cat([frames[:, :1], frames], dim=1)  # frame 0 (K^0) is never a target
+    clip_weights = torch.cat([weights[:, :1], weights], dim=1)
+    clip, start, offset = all_segments(2, 0, 7, range(1, 4))
+    bce, count, stats = interpolation_bce(interpolator, None, decoder, boundary_emb, clip_frames, clip_weights,
+                                          (clip, start, offset), "mean")
+    assert stats is None and count.tolist() == offset.tolist()
+    assert torch.equal(costs[clip, start, offset - 1], bce)

@@ -4,7 +4,7 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from keyin.data.segments import valid_frames
+from keyin.data.segments import segment_frames, valid_frames
 from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
 
 torch.manual_seed(0)
@@ -15,8 +15,9 @@ def test_segment_bce_sums_each_segments_own_frames():
     clips = torch.rand(2, 7, 2, 3, 3)
     weights = torch.rand(2, 7, 2, 3, 3) + 0.5
     clip, start, offset = torch.tensor([0, 1, 1]), torch.tensor([0, 2, 1]), torch.tensor([3, 1, 4])
-    predicted, valid = torch.randn(3, 4, 4), torch.arange(4)[None] < offset[:, None]
-    bce, count = segment_bce(DECODER, predicted, valid, clips, weights, clip, start, offset)
+    predicted = torch.randn(3, 4, 4)
+    positions, valid = segment_frames(start, offset, 4)
+    bce = segment_bce(DECODER, predicted, valid, clips, weights, clip, positions)
     for row in range(3):
         expected = sum(
             F.binary_cross_entropy_with_logits(
@@ -26,7 +27,8 @@ def test_segment_bce_sums_each_segments_own_frames():
             for i in range(int(offset[row]))
         )
         assert bce[row].item() == pytest.approx(expected.item(), rel=1e-5)
-    assert count.tolist() == offset.tolist()
+    flat = segment_bce(DECODER, predicted, valid, clips.flatten(2), weights.flatten(2), clip, positions)
+    assert torch.equal(flat, bce)  # flattened frames (B, L, D) score the same
 
 
 def test_autoencoding_bce_of_a_subset_is_rescaled_to_all_frames():
