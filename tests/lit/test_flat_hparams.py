@@ -74,3 +74,15 @@ def test_a_typed_checkpoint_loads_back_with_no_other_argument(tmp_path):
     assert type(loaded.configure_optimizers()) is torch.optim.Adam
     for name, value in module.state_dict().items():
         assert torch.equal(value, loaded.state_dict()[name]), name
+
+
+def test_the_stage_2_module_takes_typed_configs_in_at_most_twelve_arguments():
+    import dataclasses
+    import inspect
+
+    from keyin.models.config import KEYINConfig
+
+    arguments = list(inspect.signature(KeyframeModule.__init__).parameters)[1:]
+    assert len(arguments) <= 12, f"KeyframeModule.__init__ takes {len(arguments)} arguments: {arguments}"
+    assert arguments[:3] == ["net", "loss", "optimizer"]
+    assert dataclasses.is_dataclass(KEYINConfig)
