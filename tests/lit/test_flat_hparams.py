@@ -3,6 +3,8 @@ hyper-parameters of before the typed configs, loads through Lightning and throug
 as the same model, which runs; and a checkpoint of today's typed hyper-parameters loads again with
 ``KeyframeModule.load_from_checkpoint`` and no other argument."""
 
+import dataclasses
+import inspect
 import json
 from pathlib import Path
 
@@ -12,6 +14,7 @@ import torch
 
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module, load_training_module
+from keyin.models.config import KEYINConfig
 from keyin.pretrained import FOLDER, registry
 from tests.lit.tiny_models import stage2
 
@@ -77,11 +80,6 @@ def test_a_typed_checkpoint_loads_back_with_no_other_argument(tmp_path):
 
 
 def test_the_stage_2_module_takes_typed_configs_in_at_most_twelve_arguments():
-    import dataclasses
-    import inspect
-
-    from keyin.models.config import KEYINConfig
-
     arguments = list(inspect.signature(KeyframeModule.__init__).parameters)[1:]
     assert len(arguments) <= 12, f"KeyframeModule.__init__ takes {len(arguments)} arguments: {arguments}"
     assert arguments[:3] == ["net", "loss", "optimizer"]
