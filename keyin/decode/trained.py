@@ -28,7 +28,7 @@ from keyin.models.config import KEYINConfig
 from keyin.models.modes import evaluating
 
 
-def saved_prices(hparams: Mapping[str, Any]) -> Prices:
+def prices_of(hparams: Mapping[str, Any]) -> Prices:
     """The prices a stage 2's hyper-parameters set: ``map_keyframe_cost``, ``map_boundary_weight``
     and ``map_candidate_logit``."""
     return Prices(hparams["map_keyframe_cost"], hparams["map_boundary_weight"], hparams["map_candidate_logit"])
@@ -63,7 +63,7 @@ class KeyframeReader(nn.Module):
         then fills its weights."""
         hparams = upgrade_keyframe_hparams(hparams)
         config = KEYINConfig.from_dict(hparams["net"])
-        return cls(KEYIN.from_config(config), config, hparams["discovery"], saved_prices(hparams))
+        return cls(KEYIN.from_config(config), config, hparams["discovery"], prices_of(hparams))
 
     @property
     def device(self) -> torch.device:

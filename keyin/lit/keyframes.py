@@ -18,7 +18,7 @@ import torch
 from keyin.decode.prices import KNEE, MAP_CANDIDATE_LOGIT
 from keyin.decode.registry import PAPER_RULE, model_rule
 from keyin.decode.teacher import TeacherConfig, teacher_loss
-from keyin.decode.trained import KeyframeReader, saved_prices
+from keyin.decode.trained import KeyframeReader, prices_of
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.decode.flat_hparams import typed_keyframe_arguments, upgrade_keyframe_hparams
 from keyin.lit.legacy import upgrade_state_dict
@@ -97,7 +97,7 @@ class KeyframeModule(L.LightningModule):
 
     def reader(self) -> KeyframeReader:
         """This module's model read by its discovery rule at its prices (the model shared, not copied)."""
-        return KeyframeReader(self.model, self.config, self.hparams.discovery, saved_prices(self.hparams))
+        return KeyframeReader(self.model, self.config, self.hparams.discovery, prices_of(self.hparams))
 
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
