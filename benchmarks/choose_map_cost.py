@@ -104,12 +104,12 @@ def main() -> None:
     if args.candidate_logits:
         if keys.boundary_scores is None:
             raise SystemExit(f"{args.ckpt} has no boundary scores (offset_evidence): map_pruned needs them")
-        weight, offsets = module.hparams.map_boundary_weight, torch.arange(1, max_offset + 1)
+        weight, offsets = module.prices().boundary_weight, torch.arange(1, max_offset + 1)
         rows += ["", f"map_pruned at the model's α = {weight:g}: *rendered*, the share of the segment frames map renders "
                  "that map_pruned renders; *same*, the share of clips with map's keyframes at the same λ.", "",
                  "| λ (nats) | τ (least boundary logit) | rendered | same | F1 | F1 interior | ±1 F1 | precision | recall | keyframes/clip |",
                  "|---|---|---|---|---|---|---|---|---|---|"]
-        for cost in (module.hparams.map_keyframe_cost, KNEE):
+        for cost in (module.prices().keyframe_cost, KNEE):
             exact = decode(cost, weight)
             for logit in args.candidate_logits:
                 rendered = all_frames = 0.0

@@ -49,8 +49,8 @@ from keyin.data.hdf5 import load_arrays
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.decode.changepoint import ChangepointKeyframes
 from keyin.decode.registry import rule_named
+from keyin.decode.trained import KeyframeReader
 from keyin.eval.f1 import keyframe_scores
-from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module
 from keyin.models.keyin import KEYIN
 from keyin.pipelines.discover import discover_videos
@@ -59,7 +59,7 @@ from keyin.pretrained import is_pretrained
 PARTS = {  # part -> (owner, attribute) of the function timed
     "encoder + posterior": (KEYIN, "keyframes"),
     "segment costs": (keyin.decode.rules, "interpolation_costs"),
-    "video segment costs": (KeyframeModule, "video_costs"),
+    "video segment costs": (KeyframeReader, "video_costs"),
     "DP": (keyin.decode.segmentation, "best_segmentation"),
     "files": (keyin.pipelines.discover, "write_video_folder"),
 }
@@ -90,13 +90,13 @@ def timed_parts() -> Iterator[dict[str, float]]:
             setattr(owner, name, originals[part])
 
 
-def smoke_module(dataset: str):
-    """keyin_plus at scale=smoke on ``dataset``'s sizes, as initialised."""
+def smoke_module(dataset: str) -> KeyframeReader:
+    """keyin_plus at scale=smoke on ``dataset``'s sizes, as initialised, read by its rule."""
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
         cfg = compose("train", overrides=["scale=smoke", "model=keyin_plus", f"dataset={dataset}"])
     torch.manual_seed(0)
     stage1 = instantiate(cfg.model.interpolator)
-    return instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams)).eval()
+    return instantiate(cfg.model.keyframes, stage1=dict(stage1.hparams)).eval().reader()
 
 
 def long_clip(folder: Path, n_frames: int, kind: str, data_dir: Path) -> tuple[Path, Path, list[int]]:

@@ -88,7 +88,7 @@ def diagnose(module, batch: dict, constant: int) -> dict[str, float]:
     n_cond, n_keys = model.n_cond, hp.n_keyframes
     max_offset = hp.stage1["max_offset"]
     clips, lengths = batch["frames"], batch["future_length"]
-    pixel_weights = future_pixel_weights(module.pixel_weights(clips), n_cond)
+    pixel_weights = future_pixel_weights(module.reader().pixel_weights(clips), n_cond)
     truth = true_offsets(batch["keyframes"], lengths, n_keys, max_offset)
     result: dict[str, float] = {}
     with torch.no_grad():

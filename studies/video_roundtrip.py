@@ -80,7 +80,7 @@ def main() -> None:
     began = time.perf_counter()
     module, config = load_trained_module(args.ckpt)
     dataset = config["dataset"]
-    rule = args.rule or module.hparams.discovery
+    rule = args.rule or module.discovery
     find = module.discoverers("model", [rule])
     (discoverer,) = find.values()
     arrays = load_arrays(args.data)

@@ -141,7 +141,7 @@ def forward(module, clips: torch.Tensor, lengths: torch.Tensor, arm: Arm) -> dic
 def validate(module, batch: dict, arm: Arm) -> dict[str, float]:
     """Argmax-offset F1 (keyin-eval's ``offsets``) and the loss terms on the validation batch."""
     clips, lengths = batch["frames"], batch["future_length"]
-    found = module.discover(clips, lengths, "offsets")
+    found = module.reader().discover(clips, lengths, "offsets")
     scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
     with evaluating(module):
         torch.manual_seed(0)

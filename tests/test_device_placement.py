@@ -27,7 +27,7 @@ import keyin.lit.interpolator
 from keyin.data.imports import ImportSpec, read_videos
 from keyin.decode.registry import RULES, rule_named
 from keyin.decode.rules import SegmentationDiscoverer
-from keyin.decode.trained import TrainedKeyframes
+from keyin.decode.trained import KeyframeReader
 from keyin.envs.segmentation import PUCK_RGB
 from keyin.lit.frame_autoencoder import FrameAutoencoderModule
 from keyin.pipelines.discover import discover_video
@@ -126,8 +126,8 @@ def rule_discoverers() -> dict[str, tuple[str, Callable]]:
         evidence = name == "keyin_plus"
         for rule, decoding in RULES.items():
             if decoding.runs_on(evidence):
-                found[f"{name}-{rule}"] = (name, lambda m, rule=rule: functools.partial(m.discover, discovery=rule))
-    found["keyin_plus-map-knee"] = ("keyin_plus", lambda m: functools.partial(m.discover, discovery="map",
+                found[f"{name}-{rule}"] = (name, lambda m, rule=rule: functools.partial(m.reader().discover, discovery=rule))
+    found["keyin_plus-map-knee"] = ("keyin_plus", lambda m: functools.partial(m.reader().discover, discovery="map",
                                                                                keyframe_cost="knee"))
     found["surprise"] = ("surprise", lambda m: m.discover)
     found["surprise-shift0"] = ("surprise", lambda m: functools.partial(m.discover, shift=0))
@@ -155,10 +155,10 @@ def test_every_discovery_rule_runs_on_the_gpu_and_finds_the_keyframes_it_finds_o
 
 @pytest.mark.parametrize("rule", ["map", "map_pruned", "boundaries"])
 def test_keyin_discover_finds_a_videos_keyframes_on_the_gpu_without_lightning(tmp_path, rule):
-    """keyin-discover's path: a checkpoint's :class:`TrainedKeyframes` on the GPU, the video's shared
+    """keyin-discover's path: a checkpoint's :class:`KeyframeReader` on the GPU, the video's shared
     segment costs (map), its pruned segments (map_pruned), the keyframe probabilities as scores."""
     trained = MODELS["keyin_plus"]()
-    model = TrainedKeyframes(**trained.hparams)
+    model = KeyframeReader.from_hparams(**trained.hparams)
     model.load_state_dict(trained.state_dict())
     np.save(tmp_path / "noise.npy", np.random.default_rng(0).integers(0, 256, (20, 8, 8, 1), dtype=np.uint8))
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=N_FUTURE, frame_stride=1, window_stride=3)
@@ -248,4 +248,4 @@ def test_the_check_fails_map_whose_segment_steps_are_made_on_the_cpu(monkeypatch
     module = MODELS["keyin_plus"]().eval()
     clips = batch(seed=2)
     with GPUCheck(), pytest.raises(DeviceMismatch, match="Expected all tensors to be on the same device"):
-        to_gpu(module).discover(clips["frames"], clips["future_length"], discovery="map")
+        to_gpu(module).reader().discover(clips["frames"], clips["future_length"], discovery="map")

@@ -97,7 +97,7 @@ def chosen_rule(cfg: DictConfig, module: Any) -> str:
     from keyin.pretrained import recorded_rule
 
     if cfg.rule != AUTO:
-        return cfg.rule or module.hparams.discovery
+        return cfg.rule or module.discovery
     recorded = recorded_rule(cfg.ckpt)
     if recorded is None:
         return EXACT_RULE

@@ -69,7 +69,7 @@ def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder
     if cfg.init_ckpt:  # a warm start; a resumed run's last.ckpt then replaces these weights
         warm_start(module, cfg.init_ckpt)
     fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
-    return module.to(choose_device(cfg.device)).discoverers(cfg.model.name)  # the fit hands it back on the CPU
+    return module.to(choose_device(cfg.device)).reader().discoverers(cfg.model.name)  # the fit hands it back on the CPU
 
 
 @user_errors

@@ -1,5 +1,5 @@
 """The flat stage-2 hyper-parameters (checkpoints saved before the typed configs, and the keys of
-``model.keyframes`` in conf/model/keyin.yaml) in typed terms, without Lightning: :class:`keyin.decode.trained.TrainedKeyframes`,
+``model.keyframes`` in conf/model/keyin.yaml) in typed terms, without Lightning: :meth:`keyin.decode.trained.KeyframeReader.from_hparams`,
 :mod:`keyin.checkpoints` and :class:`keyin.lit.keyframes.KeyframeModule` read them through here."""
 
 from __future__ import annotations

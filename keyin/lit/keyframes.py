@@ -18,12 +18,12 @@ import torch
 from keyin.decode.prices import KNEE, MAP_CANDIDATE_LOGIT
 from keyin.decode.registry import PAPER_RULE, model_rule
 from keyin.decode.teacher import TeacherConfig, teacher_loss
-from keyin.decode.trained import KeyframeRules
+from keyin.decode.trained import KeyframeReader, prices_of
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.decode.flat_hparams import typed_keyframe_arguments, upgrade_keyframe_hparams
 from keyin.lit.legacy import upgrade_state_dict
 from keyin.models.modes import evaluating
-from keyin.losses.image import future_pixel_weights
+from keyin.losses.image import frame_pixel_weights, future_pixel_weights
 from keyin.losses.soft_keyframe import SoftLossConfig, keyin_loss, offset_entropy
 from keyin.models.distributions import gaussian_kl
 from keyin.models.config import KEYINConfig
@@ -32,9 +32,9 @@ from keyin.models.positions import argmax_positions
 from keyin.lit.optimizers import OptimizerPartial, optimizer_partial, optimizer_spec, trained_parameters
 
 
-class KeyframeModule(KeyframeRules, L.LightningModule):
-    """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``); its discovery
-    rules are :class:`keyin.decode.trained.KeyframeRules`'."""
+class KeyframeModule(L.LightningModule):
+    """Stage 2 of KEYIN (and of the Jumpy / Static baselines through ``offset_mode``): it trains and
+    validates; its model finds keyframes through :meth:`reader` (:class:`keyin.decode.trained.KeyframeReader`)."""
 
     stage = "keyframes"
     monitor = ("val/f1", "max")  # best.ckpt: keyframe F1 on the validation clips
@@ -58,7 +58,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             optimizer: a partial of a ``torch.optim`` class taking the parameters (or its spec,
                 :func:`keyin.lit.optimizers.optimizer_spec`).
             teacher: the segmentation teacher; None: off.
-            discovery, map_*: the discovery rule (:class:`keyin.decode.trained.KeyframeRules`).
+            discovery, map_*: the discovery rule and its prices (:class:`keyin.decode.trained.KeyframeReader`).
             frozen: which of stage 1's networks stay frozen (:data:`keyin.models.keyin.FROZEN_IN_STAGE2`).
         """
         super().__init__()
@@ -94,6 +94,10 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         upgraded (:func:`keyin.decode.flat_hparams.upgrade_keyframe_hparams`)."""
         saved = torch.load(checkpoint_path, map_location="cpu", weights_only=True)["hyper_parameters"]
         return super().load_from_checkpoint(checkpoint_path, *args, **{**upgrade_keyframe_hparams(saved), **kwargs})
+
+    def reader(self) -> KeyframeReader:
+        """This module's model read by its discovery rule at its prices (the model shared, not copied)."""
+        return KeyframeReader(self.model, self.config, self.hparams.discovery, prices_of(self.hparams))
 
     def load_stage1(self, state_dict: dict[str, torch.Tensor]) -> None:
         """Copy the frozen modules' weights from a stage-1 checkpoint's state dict."""
@@ -133,7 +137,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
             out["offset_probs"], out["key_emb"], out["future_emb"], out["frames"], clips[:, n_cond:].flatten(2),
             gaussian_kl(out["mu"], out["log_sigma"]), future_length, weights.beta_ke, weights.beta_ki, weights.beta_kl,
             weights.normalize_key_targets, key_frames_pred=key_frames,
-            pixel_weights=future_pixel_weights(self.pixel_weights(clips), n_cond),
+            pixel_weights=future_pixel_weights(frame_pixel_weights(clips, self.config.frames), n_cond),
             reduction=weights.reduction, latent_dim=self.config.predictor.latent_dim,
         )
 
@@ -163,7 +167,7 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
 
     def validation_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> None:
         self._shared_step(batch, "val")
-        for name, find in self.discoverers("").items():
+        for name, find in self.reader().discoverers("").items():
             summary = discovery_summary(find(batch["frames"], batch["future_length"]), batch["keyframes"])
             self.log_dict({f"val/{key}{name}": value for key, value in summary.items()}, prog_bar=not name, sync_dist=True)
 
@@ -182,7 +186,8 @@ class KeyframeModule(KeyframeRules, L.LightningModule):
         with evaluating(self):
             posterior = self.model(clips, lengths, mode="posterior", sample=False)
             prior = self.model(clips[:count], lengths[:count], mode="prior", sample=True)
-        discovered, truth = self.discover(clips[:count], lengths[:count]), keyframe_lists(batch["keyframes"][:count])
+            discovered = self.reader().discover(clips[:count], lengths[:count])
+        truth = keyframe_lists(batch["keyframes"][:count])
         sampled = argmax_positions(prior["offset_probs"]).tolist()
         videos = [clips[:count], self.model.argmax_video(clips, posterior)[:count], self.model.argmax_video(clips[:count], prior)]
         return {

@@ -1,7 +1,7 @@
 """Which module each stage's checkpoint holds, and loading a trained one.
 
-A stage-2 checkpoint loads as a :class:`keyin.decode.trained.TrainedKeyframes`, built with torch
-alone: keyin-eval and keyin-discover on a KEYIN, Jumpy or Static model never import Lightning
+A stage-2 checkpoint loads as a :class:`keyin.decode.trained.KeyframeReader` (the model, its rule and
+prices), built with torch alone: keyin-eval and keyin-discover on a KEYIN, Jumpy or Static model never import Lightning
 (a second or more of every command's start). The other stages load as their LightningModule.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import torch
 from torch import nn
@@ -24,12 +24,13 @@ STAGES: dict[str, str] = {
 }
 
 
-def stage_class(stage: str) -> type[nn.Module]:
-    """The class a checkpoint of ``stage`` loads as: a stage 2 without Lightning, else its LightningModule."""
+def stage_builder(stage: str) -> Callable[..., nn.Module]:
+    """What builds the module a checkpoint of ``stage`` loads as from its hyper-parameters: a stage 2's
+    reader without Lightning, else the stage's LightningModule."""
     if stage == "keyframes":
-        from keyin.decode.trained import TrainedKeyframes
+        from keyin.decode.trained import KeyframeReader
 
-        return TrainedKeyframes
+        return KeyframeReader.from_hparams
     module, name = STAGES[stage].split(":")
     return getattr(importlib.import_module(module), name)
 
@@ -53,7 +54,7 @@ def load_trained_module(
         stage: one of :data:`STAGES`, or None for whichever the checkpoint holds.
     """
     checkpoint = load_checkpoint(path, stage)
-    module = stage_class(checkpoint[STAGE_KEY])(**checkpoint["hyper_parameters"])
+    module = stage_builder(checkpoint[STAGE_KEY])(**checkpoint["hyper_parameters"])
     module.load_state_dict(checkpoint["state_dict"])
     return module.to(device).eval(), run_config(checkpoint)
 

@@ -11,10 +11,13 @@ plain BCE of the paper, and the function then returns None so callers skip the p
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import torch
 from torch import Tensor
+
+if TYPE_CHECKING:
+    from keyin.models.config import FrameModelConfig
 
 
 def changed_pixel_weights(clips: Tensor, weight: float, threshold: float) -> Tensor | None:
@@ -34,6 +37,12 @@ def changed_pixel_weights(clips: Tensor, weight: float, threshold: float) -> Ten
     changed = (clips - clips[:, :1]).abs().amax(2, keepdim=True) > threshold  # (B, L, 1, H, W)
     weights = torch.where(changed, weight, 1.0).to(clips.dtype)
     return weights.expand_as(clips)
+
+
+def frame_pixel_weights(clips: Tensor, frames: FrameModelConfig) -> Tensor | None:
+    """:func:`changed_pixel_weights` of (B, L, C, H, W) clips at a frame model's ``foreground_weight``
+    and ``foreground_threshold``: the weights stage 1 was trained with, (B, L, C, H, W) or None."""
+    return changed_pixel_weights(clips, frames.foreground_weight, frames.foreground_threshold)
 
 
 def future_pixel_weights(weights: Tensor | None, n_cond: int) -> Tensor | None:

@@ -10,11 +10,12 @@ from torch import nn
 
 @contextmanager
 def evaluating(module: nn.Module) -> Iterator[nn.Module]:
-    """``module.eval()`` for the ``with`` block, then back to the mode it was in (through
-    ``module.train``, so a module that keeps parts frozen re-freezes them)."""
-    was_training = module.training
+    """``module.eval()`` for the ``with`` block, then every submodule back to the mode it was in (so
+    the parts a training module keeps frozen in eval mode stay so, whichever module is switched)."""
+    modes = [(part, part.training) for part in module.modules()]
     module.eval()
     try:
         yield module
     finally:
-        module.train(was_training)
+        for part, training in modes:
+            part.training = training

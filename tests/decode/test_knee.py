@@ -45,7 +45,7 @@ def test_a_price_that_is_neither_a_number_nor_knee_is_refused():
 def test_keyin_reads_keyframes_out_by_the_knee_price_and_refuses_another_word():
     from tests.planning.trained_models import keyframe_module
 
-    module = keyframe_module(discovery="map", map_keyframe_cost=KNEE)
+    module = keyframe_module(discovery="map", map_keyframe_cost=KNEE).reader()
     clips, lengths = torch.rand(3, 7, 3, 16, 16), torch.tensor([6, 6, 4])
     positions = module.discover(clips, lengths)
     assert len(positions) == 3 and all(0 <= p < n for row, n in zip(positions, lengths.tolist()) for p in row)

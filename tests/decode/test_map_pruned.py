@@ -89,8 +89,8 @@ def test_map_pruned_needs_boundary_scores_and_keeps_maps_keyframes_when_every_fr
         rule_named("map_pruned")(plain.model, clips, lengths)
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(discovery="map_pruned")
-    module = keyframe_module(offset_evidence=True, discovery="map_pruned").eval()
-    module.hparams.map_candidate_logit = -float("inf")  # every frame a candidate
+    module = keyframe_module(offset_evidence=True, discovery="map_pruned").eval().reader()
+    module.saved_prices = module.prices(candidate_logit=-float("inf"))  # every frame a candidate
     for price in (0.0, "knee"):
         exact = module.discover(clips, lengths, "map", keyframe_cost=price)
         assert module.discover(clips, lengths, "map_pruned", keyframe_cost=price) == exact
@@ -101,8 +101,8 @@ def test_map_pruned_needs_boundary_scores_and_keeps_maps_keyframes_when_every_fr
 def test_precomputed_costs_must_hold_every_segment_the_rule_prices():
     from tests.planning.trained_models import keyframe_module
 
-    module = keyframe_module(offset_evidence=True).eval()
-    module.hparams.map_candidate_logit = -float("inf")
+    module = keyframe_module(offset_evidence=True).eval().reader()
+    module.saved_prices = module.prices(candidate_logit=-float("inf"))
     clips, lengths = torch.rand(2, 7, 3, 16, 16), torch.tensor([6, 6])
     costs = torch.full((2, 6, 3), float("inf"))  # nothing computed
     with pytest.raises(ValueError, match="costs lack segments"):

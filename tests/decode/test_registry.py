@@ -88,7 +88,7 @@ def test_each_rule_finds_the_keyframes_of_its_brute_force_reference(stage2, name
         if rule.adds_sequence_ends and length < clips.shape[1] - module.model.n_cond:
             expected = [*expected, length - 1]
         assert found[row] == expected, row
-    assert module.discover(clips, lengths, name, PRICES.keyframe_cost, candidate_logit=prices.candidate_logit) == found
+    assert module.reader().discover(clips, lengths, name, PRICES.keyframe_cost, candidate_logit=prices.candidate_logit) == found
 
 
 @pytest.mark.parametrize("name", RULES)

@@ -1,4 +1,4 @@
-"""A stage-2 checkpoint built without Lightning finds the keyframes the LightningModule finds."""
+"""A stage-2 checkpoint's reader, built without Lightning, finds the keyframes the LightningModule's reader finds."""
 
 import dataclasses
 import inspect
@@ -6,7 +6,7 @@ import inspect
 import torch
 
 from keyin.decode.teacher import TeacherConfig
-from keyin.decode.trained import TrainedKeyframes
+from keyin.decode.trained import KeyframeReader
 from keyin.lit.keyframes import KeyframeModule
 from keyin.decode.flat_hparams import typed_keyframe_arguments
 from keyin.losses.soft_keyframe import SoftLossConfig
@@ -31,10 +31,10 @@ def test_a_flat_checkpoint_without_the_later_options_upgrades_to_the_typed_defau
     assert (net.delta_input, net.gumbel_offsets, net.interpolate_from) == ("soft", False, "predicted")
 
 
-def test_the_plain_module_discovers_as_the_lightning_module_by_every_rule():
-    trained = stage2("ours", offset_evidence=True, discovery="map").eval()
-    plain = TrainedKeyframes(**trained.hparams)
-    plain.load_state_dict(trained.state_dict())
+def test_a_checkpoints_reader_discovers_as_the_training_modules_by_every_rule():
+    lightning = stage2("ours", offset_evidence=True, discovery="map").eval()
+    plain, trained = KeyframeReader.from_hparams(**lightning.hparams), lightning.reader()
+    plain.load_state_dict(lightning.state_dict())
     clips = batch()
     for rule in ("offsets", "boundaries", "map", "map_pruned", "segmentation"):
         assert plain.discover(clips["frames"], clips["future_length"], rule) == trained.discover(

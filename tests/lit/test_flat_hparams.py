@@ -12,6 +12,7 @@ import lightning as L
 import pytest
 import torch
 
+from keyin.decode.trained import KeyframeReader
 from keyin.lit.keyframes import KeyframeModule
 from keyin.lit.registry import load_trained_module, load_training_module
 from keyin.models.config import KEYINConfig
@@ -33,7 +34,7 @@ def lightning_file(path: Path, folder: Path) -> Path:
     return copy
 
 
-def outputs(module: torch.nn.Module) -> dict[str, torch.Tensor]:
+def outputs(module: KeyframeReader) -> dict[str, torch.Tensor]:
     """The posterior mean forward (z = 0 where the interpolator is stochastic) of fixed random clips."""
     config = module.config
     torch.manual_seed(0)
@@ -56,11 +57,12 @@ def test_every_shipped_and_committed_stage_2_loads_through_lightning_and_without
     trained, _ = load_training_module(path)
     lightning = KeyframeModule.load_from_checkpoint(lightning_file(path, tmp_path), map_location="cpu")
     assert plain.config == trained.config == lightning.config
-    assert plain.hparams == dict(trained.hparams) == dict(lightning.hparams)
+    assert dict(trained.hparams) == dict(lightning.hparams)
+    assert plain.discovery == trained.hparams.discovery and plain.prices() == trained.reader().prices()
     assert lightning.hparams.optimizer["lr"] == saved["lr"] and trained.loss.beta_kl == saved["beta_kl"]
     expected = outputs(plain)
     for module in (trained, lightning):
-        got = outputs(module)
+        got = outputs(module.reader())
         assert got.keys() == expected.keys()
         for key, value in expected.items():
             torch.testing.assert_close(got[key], value, msg=key)

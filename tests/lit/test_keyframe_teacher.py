@@ -65,7 +65,7 @@ def test_with_offset_evidence_the_teacher_also_trains_the_boundary_scores():
 
 
 def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored():
-    module = keyframe_module(0.0, offset_evidence=True, discovery="boundaries")
+    module = keyframe_module(0.0, offset_evidence=True, discovery="boundaries").reader()
     with torch.no_grad():
         module.model.predictor.boundary_head.bias.fill_(-5.0)  # no boundary anywhere but where the
         module.model.predictor.boundary_head.weight.zero_()  # per-frame scores are forced below
@@ -78,7 +78,7 @@ def test_boundary_discovery_decodes_the_boundary_scores_and_offsets_stay_scored(
     mapped = module.discover(data["frames"], data["future_length"], discovery="map")
     assert all(all(0 <= p < n - 1 for p in row) for row, n in zip(mapped[:2], [6, 6]))
     assert mapped[2][-1] == 3 and all(0 <= p < 3 for p in mapped[2][:-1])
-    assert list(keyframe_module(0.0).discoverers("jumpy")) == ["jumpy"]
+    assert list(keyframe_module(0.0).reader().discoverers("jumpy")) == ["jumpy"]
     with pytest.raises(ValueError, match="needs offset_evidence"):
         keyframe_module(0.0, discovery="boundaries")
 

@@ -23,3 +23,11 @@ def test_stage2_in_train_mode_keeps_stage1_frozen_in_eval_mode():
         part = getattr(module.model, name)
         assert not part.training and not any(p.requires_grad for p in part.parameters()), name
     assert module.model.predictor.training and all(p.requires_grad for p in module.model.predictor.parameters())
+
+
+def test_evaluating_the_model_alone_keeps_stage1_frozen():
+    """A reader switches a training module's model, not the module: stage 1 must come back in eval mode."""
+    module = keyframe_module().train()
+    with evaluating(module.model):
+        assert not module.model.predictor.training
+    assert module.model.predictor.training and not module.model.encoder.training

@@ -120,7 +120,7 @@ def test_windows_sharing_their_videos_segment_costs_find_the_same_keyframes(tmp_
     from keyin.decode.segment_costs import interpolation_costs
     from tests.lit.test_keyframe_teacher import keyframe_module
 
-    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map")
+    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map").reader()
     np.save(tmp_path / "noise.npy", np.random.default_rng(0).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
     n_future = module.config.n_future
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
@@ -154,7 +154,7 @@ def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(t
     from keyin.decode.segment_costs import interpolation_costs
     from tests.lit.test_keyframe_teacher import keyframe_module
 
-    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map_pruned")
+    module = keyframe_module(teacher_weight=0.0, offset_evidence=True, discovery="map_pruned").reader()
     np.save(tmp_path / "noise.npy", np.random.default_rng(1).integers(0, 256, (45, 8, 8, 1), dtype=np.uint8))
     n_future = module.config.n_future
     windows = ImportSpec(image_size=8, channels=1, n_cond=N_COND, n_future=n_future, frame_stride=1, window_stride=3)
@@ -162,7 +162,7 @@ def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(t
     clips = next(iter(window_batches(video, N_COND, n_future, 64)))[1]
     _, keys = module.model.eval().keyframes(clips, torch.full((len(clips),), n_future), mode="posterior", sample=False,
                                             chain="argmax")
-    module.hparams.map_candidate_logit = float(keys.boundary_scores.detach().median())  # about half the frames are candidates
+    module.saved_prices = module.prices(candidate_logit=float(keys.boundary_scores.detach().median()))  # about half the frames are candidates
     received = []
 
     def discoverer(clips, future_length, costs=None):
@@ -195,7 +195,7 @@ def test_map_pruned_windows_share_the_costs_of_the_segments_any_of_them_prices(t
 def test_window_relative_pixel_weights_keep_each_windows_own_costs():
     from tests.lit.test_keyframe_teacher import keyframe_module
 
-    module = keyframe_module(teacher_weight=0.0)
+    module = keyframe_module(teacher_weight=0.0).reader()
     module.config = dataclasses.replace(module.config, frames=dataclasses.replace(module.config.frames, foreground_weight=20.0))  # changed pixels weigh more: relative to a window's first frame
     assert module.video_costs(torch.zeros(5, 8, 8, 1, dtype=torch.uint8)) is None
 
@@ -203,7 +203,7 @@ def test_window_relative_pixel_weights_keep_each_windows_own_costs():
 def test_segment_costs_passed_where_no_rule_reads_them_are_refused():
     from tests.lit.test_keyframe_teacher import batch, keyframe_module
 
-    module, clips = keyframe_module(teacher_weight=0.0), batch()
+    module, clips = keyframe_module(teacher_weight=0.0).reader(), batch()
     costs = torch.zeros(3, 6, 3)
     with pytest.raises(ValueError, match="reads no segment costs"):
         module.discover(clips["frames"], clips["future_length"], discovery="offsets", costs=costs)
