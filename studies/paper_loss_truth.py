@@ -96,8 +96,9 @@ class Stage1:
     def __init__(self, module: Any) -> None:
         holder = getattr(module, "model", module)
         self.encoder, self.decoder, self.interpolator = holder.encoder, holder.decoder, holder.interpolator
-        hparams = module.hparams.get("stage1", module.hparams)
-        self.n_cond, self.max_offset = hparams["n_cond"], hparams["max_offset"]
+        config = getattr(module, "config", None)  # a stage-2 reader's KEYINConfig; a stage-1 module's hparams
+        sizes = {"n_cond": config.n_cond, "max_offset": config.max_offset} if config is not None else module.hparams
+        self.n_cond, self.max_offset = sizes["n_cond"], sizes["max_offset"]
         for network in (self.encoder, self.decoder, self.interpolator):
             network.eval().requires_grad_(False)
 

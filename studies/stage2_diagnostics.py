@@ -84,9 +84,8 @@ def gradient_raises_true_offset(module, batch: dict, first_offset: torch.Tensor)
 
 
 def diagnose(module, batch: dict, constant: int) -> dict[str, float]:
-    model, hp = module.model, module.hparams
-    n_cond, n_keys = model.n_cond, hp.n_keyframes
-    max_offset = hp.stage1["max_offset"]
+    model, config = module.model, module.config
+    n_cond, n_keys, max_offset = model.n_cond, config.predictor.n_keyframes, config.max_offset
     clips, lengths = batch["frames"], batch["future_length"]
     pixel_weights = future_pixel_weights(module.reader().pixel_weights(clips), n_cond)
     truth = true_offsets(batch["keyframes"], lengths, n_keys, max_offset)
@@ -135,8 +134,10 @@ def main() -> None:
     started = time.perf_counter()
     result = diagnose(module, batch, constant)
     seconds = time.perf_counter() - started
-    hp = module.hparams
-    options = {key: hp.get(key) for key in ("delta_input", "loss_reduction", "attn_scale", "normalize_key_targets", "entropy_bonus", "lr")}
+    hp = module.hparams  # typed since issue 59: net, loss, optimizer
+    options = {"delta_input": hp.net["delta_input"], "loss_reduction": hp.loss["reduction"],
+               "attn_scale": hp.net["predictor"]["attn_scale"], "normalize_key_targets": hp.loss["normalize_key_targets"],
+               "entropy_bonus": hp.loss["entropy_bonus"], "lr": hp.optimizer.get("lr")}
     lines = [
         f"# Stage-2 diagnostics: {args.ckpt}",
         "",

@@ -136,9 +136,11 @@ def test_the_papers_open_choices_train_on_the_stage_1_inside_a_stage_2_checkpoin
                  "model.keyframes.delta_input=straight_through", "model.keyframes.loss_reduction=per_pixel",
                  "model.keyframes.entropy_bonus=0.5", "model.keyframes.entropy_bonus_steps=2", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    module, config = load_trained_module(tmp_path / "run" / "checkpoints" / "keyframes" / "last.ckpt")
+    trained_path = tmp_path / "run" / "checkpoints" / "keyframes" / "last.ckpt"
+    module, config = load_trained_module(trained_path)
     assert config["model"]["name"] == "keyin_paper" and module.model.delta_input == "straight_through"
-    assert module.hparams.loss["reduction"] == "per_pixel" and module.hparams.loss["entropy_bonus"] == 0.5
+    loss = load_checkpoint(trained_path)["hyper_parameters"]["loss"]
+    assert loss["reduction"] == "per_pixel" and loss["entropy_bonus"] == 0.5
     given = load_checkpoint(source)["state_dict"]
     for name, value in module.model.interpolator.state_dict().items():
         torch.testing.assert_close(value, given[f"model.interpolator.{name}"])
