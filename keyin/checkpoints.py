@@ -11,7 +11,7 @@ import torch
 
 from keyin.errors import CheckpointError
 from keyin.decode.flat_hparams import upgrade_keyframe_hparams
-from keyin.lit.legacy import current_model_name, upgrade_state_dict
+from keyin.legacy import current_model_name, upgrade_state_dict
 from keyin.models.config import KEYINConfig
 from keyin.models.keyin import STAGE1
 from keyin.models.state import sub_state_dict

@@ -21,7 +21,7 @@ from keyin.decode.teacher import TeacherConfig, teacher_loss
 from keyin.decode.trained import KeyframeReader, prices_of
 from keyin.eval.f1 import discovery_summary, keyframe_lists
 from keyin.decode.flat_hparams import typed_keyframe_arguments, upgrade_keyframe_hparams
-from keyin.lit.legacy import upgrade_state_dict
+from keyin.legacy import upgrade_state_dict
 from keyin.models.modes import evaluating
 from keyin.losses.image import frame_pixel_weights, future_pixel_weights
 from keyin.losses.soft_keyframe import SoftLossConfig, keyin_loss, offset_entropy

@@ -17,7 +17,7 @@ import torch
 from keyin.data.segments import valid_frames
 from keyin.decode.surprise import surprise_keyframes
 from keyin.eval.f1 import discovery_summary, keyframe_lists
-from keyin.lit.legacy import upgrade_state_dict
+from keyin.legacy import upgrade_state_dict
 from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.svg import SVGTerms, kl_reveal_ratio, kl_schedule, svg_loss, svg_terms

@@ -9,7 +9,7 @@ from torch.utils.data import DataLoader
 
 from keyin import __version__
 from keyin.lit.checkpoints import CONFIG_KEY, VERSION_KEY, saved_model_name
-from keyin.lit.legacy import upgrade_state_dict
+from keyin.legacy import upgrade_state_dict
 from keyin.lit.registry import load_trained_module
 from keyin.lit.surprise import SurpriseModule
 from tests.planning.trained_models import SIZE, keyframe_module, save, surprise_module
