@@ -20,6 +20,9 @@ validation clips and logs each term of the loss there. The arms change one chann
   K̃^e(δ), with aids that keep δ from saturating: the offset head initialised to zero (``_uniform``), its logits' temperature
   annealed from 10 to 1 over 1000 steps (``_anneal``), its learning rate a tenth of the rest's (``_slow``), the keyframe
   KL's weight 0 so that nothing pulls the latents to the prior (``_kl0``);
+- ``placed``: not a warm start from a trained stage 2: a fresh predictor (``--scratch-overrides``, e.g. the stated
+  configuration's ``experiment=brownian_keyin_stated``) on the checkpoint's stage 1, its first 300 steps the paper's loss plus
+  100 × the cross-entropy of δ^t at the labelled offsets (labels only place the start), then the paper's loss alone;
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
   weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
@@ -44,10 +47,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # c
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
 from paper_loss_truth import Clips, Reading, interpolation_term  # noqa: E402
+from stage2_diagnostics import true_offsets  # noqa: E402
 
+from keyin.checkpoints import load_checkpoint  # noqa: E402
 from keyin.data.datamodule import split_clips  # noqa: E402
 from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
-from keyin.lit.registry import load_training_module  # noqa: E402
+from keyin.lit.registry import load_training_module, run_config  # noqa: E402
 from keyin.models.modes import evaluating  # noqa: E402
 from keyin.losses.soft_keyframe import offset_entropy  # noqa: E402
 from keyin.models.positions import position_distributions, soft_keyframe_targets  # noqa: E402
@@ -68,6 +73,10 @@ class Arm:
     temperature: float = 1.0  # offset logits divided by T, annealed linearly from this to 1 over anneal_steps
     anneal_steps: int = 1000
     offset_lr_scale: float = 1.0  # the offset head's learning rate, a fraction of the rest's
+    # labels only place the start (issue 62, item 2): the first place_steps steps add place_weight times the cross-entropy
+    # of δ^t against the labelled offsets to the paper's loss; after them, the paper's loss alone
+    place_steps: int = 0
+    place_weight: float = 100.0
 
 
 ARMS = {
@@ -85,11 +94,15 @@ ARMS = {
     "scratch_frames_anneal": Arm(scratch=True, tie="interpolator", uniform_init=True, temperature=10.0),
     "scratch_frames_slow": Arm(scratch=True, tie="interpolator", uniform_init=True, offset_lr_scale=0.1),
     "scratch_frames_kl0": Arm(scratch=True, tie="interpolator", uniform_init=True, beta_kl=0.0),
+    # a fresh predictor (--scratch-overrides: the stated configuration's) placed at the labelled offsets, then the paper's loss
+    "placed": Arm(scratch=True, place_steps=300, lr=2e-4),
 }
+SCRATCH_OVERRIDES = ["model=keyin_paper", "backbone=ours", "scale=cpu"]  # the Table 1 rows' keyin_paper
 
 
-def scratch_module(ckpt: str):
-    """A fresh stage 2 of the paper's KEYIN (``model=keyin_paper backbone=ours scale=cpu``) on ``ckpt``'s stage 1."""
+def scratch_module(ckpt: str, overrides: list[str]):
+    """A fresh stage 2 composed by keyin-train's ``overrides`` (:data:`SCRATCH_OVERRIDES`; the stated configuration:
+    ``experiment=brownian_keyin_stated``) on ``ckpt``'s stage 1."""
     from hydra import compose, initialize_config_module
 
     from keyin.checkpoints import load_stage1
@@ -97,10 +110,22 @@ def scratch_module(ckpt: str):
 
     stage1 = load_stage1(ckpt)
     with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
-        cfg = compose("train", overrides=["model=keyin_paper", "backbone=ours", "scale=cpu"])
+        cfg = compose("train", overrides=overrides)
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
     return module
+
+
+def placement_loss(offset_probs: torch.Tensor, keyframes: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
+    """() the mean over clips of Σ_t −log δ^t at the labelled offsets (then the one leaving the clip, the rest S).
+
+    Args:
+        offset_probs: (B, M, S) δ; keyframes: (B, N) bool labels; lengths: (B,) valid future frames.
+    """
+    n_keyframes, max_offset = offset_probs.shape[1:]
+    truth = true_offsets(keyframes, lengths, n_keyframes, max_offset).to(offset_probs.device)  # (B, M) in 1..S
+    picked = offset_probs.gather(-1, (truth - 1)[..., None]).squeeze(-1)  # (B, M)
+    return -picked.clamp_min(1e-12).log().sum(-1).mean()
 
 
 def temperature_at(arm: Arm, step: int) -> float:
@@ -155,10 +180,11 @@ def validate(module, batch: dict, arm: Arm) -> dict[str, float]:
     }
 
 
-def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int) -> list[dict]:
+def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int, batch_size: int, seed: int,
+            scratch_overrides: list[str] = SCRATCH_OVERRIDES) -> list[dict]:
     spec = ARMS[arm]
     torch.manual_seed(seed)
-    module = scratch_module(ckpt) if spec.scratch else load_training_module(ckpt)[0]
+    module = scratch_module(ckpt, scratch_overrides) if spec.scratch else load_training_module(ckpt)[0]
     if spec.beta_ke is not None:
         module.loss = dataclasses.replace(module.loss, beta_ke=spec.beta_ke)
     if spec.beta_kl is not None:
@@ -187,6 +213,8 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
         module.train()
         out = forward(module, batch["frames"], batch["future_length"], spec)
         loss = arm_loss(module, batch["frames"], batch["future_length"], out, spec.expected)["loss"]
+        if step <= spec.place_steps:  # labels place the start, then the paper's loss alone
+            loss = loss + spec.place_weight * placement_loss(out["offset_probs"], batch["keyframes"], batch["future_length"])
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
@@ -205,20 +233,24 @@ def main() -> None:
     parser.add_argument("--batch-size", type=int, default=30)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--scratch-overrides", nargs="+", default=SCRATCH_OVERRIDES,
+                        help="keyin-train overrides of the fresh predictor of the scratch arms (e.g. experiment=brownian_keyin_stated)")
     args = parser.parse_args()
-    module, config = load_training_module(args.ckpt)
+    config = run_config(load_checkpoint(args.ckpt, None))  # a stage-2 checkpoint, or for the scratch arms a stage-1 one
     dataset, val_batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
     train = split_clips(dataset, instantiate(dataset.generator), "train", 100_000, args.data_dir)
     started = time.perf_counter()
     results = {}
     for arm in args.arms:
-        results[arm] = run_arm(args.ckpt, arm, train, val_batch, args.steps, args.every, args.batch_size, args.seed)
+        results[arm] = run_arm(args.ckpt, arm, train, val_batch, args.steps, args.every, args.batch_size, args.seed,
+                               args.scratch_overrides)
         if args.json:  # after each arm: a stopped run keeps what it measured
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({"date": str(date.today()), **results}, indent=1))
     minutes = (time.perf_counter() - started) / 60
     command = (f"python studies/warm_start_arms.py {args.ckpt} --arms {' '.join(args.arms)} --steps {args.steps} "
-               f"--every {args.every} --clips {args.clips} --seed {args.seed}")
+               f"--every {args.every} --clips {args.clips} --seed {args.seed}"
+               + (f" --scratch-overrides {' '.join(args.scratch_overrides)}" if args.scratch_overrides != SCRATCH_OVERRIDES else ""))
     lines = [
         f"# Warm start at `{args.ckpt}` on the paper's loss alone, one channel changed per arm",
         "",

@@ -1,6 +1,7 @@
 """The studies' own maths (studies/): what a study computes that keyin does not, checked as keyin's maths is."""
 
 import itertools
+import math
 import sys
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from readout_chain import joint_offset_keyframes, offset_log_probs  # noqa: E402
+from warm_start_arms import placement_loss  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -54,3 +56,13 @@ def test_offset_log_probs_along_a_path_are_the_chains_logits():
         expected = torch.log_softmax(keys.offset_logits[:, t], -1)
         torch.testing.assert_close(table[torch.arange(2), t, place], expected, rtol=1e-5, atol=1e-5)
         place = place + keys.offset_logits[:, t].argmax(-1) + 1
+
+
+def test_the_placement_loss_is_the_cross_entropy_of_delta_at_the_labelled_offsets():
+    # one clip of N = 8 future frames, keyframes at 2 and 5: offsets 3, 3, then 3 to leave the clip (frame 8), the rest S = 4
+    keyframes = torch.zeros(1, 8, dtype=torch.bool)
+    keyframes[0, [2, 5]] = True
+    probs = torch.full((1, 4, 4), 0.1)
+    probs[0, :, 2] = 0.7  # offset 3 at 0.7 in every slot
+    expected = -(3 * math.log(0.7) + math.log(0.1))  # slots 1-3 at offset 3, slot 4 at offset S = 4
+    torch.testing.assert_close(placement_loss(probs, keyframes, torch.tensor([8])), torch.tensor(expected))
