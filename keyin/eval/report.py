@@ -173,8 +173,8 @@ def _paper(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
-def _score(value: float) -> str:
-    return "–" if math.isnan(value) else f"{value:.3f}"
+def _score(value: float, digits: int = 3) -> str:
+    return "–" if math.isnan(value) else f"{value:.{digits}f}"
 
 
 def _spread(mean: float, std: float) -> str:
@@ -221,8 +221,9 @@ def markdown_table(rows: list[TableRow]) -> str:
         lines.append(
             f"| {row.dataset} | {row.method} | {row_source(row.method)} | {_spread(m['f1_interior'], s['f1_interior'])} | "
             f"{_spread(m['f1_with_ends'], s['f1_with_ends'])} | {_spread(m['f1'], s['f1'])} | {_paper(row.paper_f1)} | "
-            f"{_score(m['f1_tol1_interior'])} | {m['f1_tol1']:.3f} | {_score(m['f1_tol2_interior'])} | {m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
-            f"{'–' if math.isnan(m['hausdorff']) else format(m['hausdorff'], '.2f')} | {_minutes(row)} | {len(row.seeds)} |"
+            f"{_score(m['f1_tol1_interior'])} | {m['f1_tol1']:.3f} | {_score(m['f1_tol2_interior'])} | "
+            f"{m['precision']:.3f} | {m['recall']:.3f} | {m['n_predicted']:.2f} | "
+            f"{_score(m['hausdorff'], 2)} | {_minutes(row)} | {len(row.seeds)} |"
         )
     return "\n".join(lines) + "\n"
 
