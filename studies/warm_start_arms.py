@@ -23,6 +23,9 @@ validation clips and logs each term of the loss there. The arms change one chann
 - ``placed``: not a warm start from a trained stage 2: a fresh predictor (``--scratch-overrides``, e.g. the stated
   configuration's ``experiment=brownian_keyin_stated``) on the checkpoint's stage 1, its first 300 steps the paper's loss plus
   100 × the cross-entropy of δ^t at the labelled offsets (labels only place the start), then the paper's loss alone;
+- ``placed_supervised``: as ``placed``, but the placement trains on the labels alone (100 × the cross-entropy of δ^t at the
+  labelled offsets, with L_ke and the KL, without L_inter) at lr 1e-3 until the validation F1 has not risen for two
+  validations (at most 1500 steps), then 500 steps of the paper's loss alone at the stated lr 2e-4 with a fresh Adam;
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
   weighted by that probability (Σ δ̃ BCE(I_j, Î_i), not the paper's BCE(I_j, Σ δ̃ Î_i)): hedging over
@@ -75,8 +78,12 @@ class Arm:
     offset_lr_scale: float = 1.0  # the offset head's learning rate, a fraction of the rest's
     # labels only place the start (issue 62, item 2): the first place_steps steps add place_weight times the cross-entropy
     # of δ^t against the labelled offsets to the paper's loss; after them, the paper's loss alone
-    place_steps: int = 0
+    place_steps: int = 0  # at most, with place_patience
     place_weight: float = 100.0
+    place_inter: bool = True  # False: the placement drops L_inter (labels, L_ke and the KL only)
+    place_lr: float | None = None  # None: lr throughout, one Adam; else the placement's lr, and a fresh Adam at lr after it
+    place_patience: int = 0  # > 0: the placement ends once the validation F1 has not risen for this many validations
+    release_steps: int = 0  # > 0: the paper's loss alone for this many steps after the placement (instead of --steps)
 
 
 ARMS = {
@@ -96,6 +103,8 @@ ARMS = {
     "scratch_frames_kl0": Arm(scratch=True, tie="interpolator", uniform_init=True, beta_kl=0.0),
     # a fresh predictor (--scratch-overrides: the stated configuration's) placed at the labelled offsets, then the paper's loss
     "placed": Arm(scratch=True, place_steps=300, lr=2e-4),
+    "placed_supervised": Arm(scratch=True, place_steps=1500, lr=2e-4, place_inter=False, place_lr=1e-3, place_patience=2,
+                             release_steps=500),
 }
 SCRATCH_OVERRIDES = ["model=keyin_paper", "backbone=ours", "scale=cpu"]  # the Table 1 rows' keyin_paper
 
@@ -126,6 +135,12 @@ def placement_loss(offset_probs: torch.Tensor, keyframes: torch.Tensor, lengths:
     truth = true_offsets(keyframes, lengths, n_keyframes, max_offset).to(offset_probs.device)  # (B, M) in 1..S
     picked = offset_probs.gather(-1, (truth - 1)[..., None]).squeeze(-1)  # (B, M)
     return -picked.clamp_min(1e-12).log().sum(-1).mean()
+
+
+def placement_over(f1s: list[float], patience: int) -> bool:
+    """Whether a placement whose validation F1 so far is ``f1s`` (the first at step 0) ends: the last ``patience``
+    validations did not beat the best before them."""
+    return 0 < patience < len(f1s) and max(f1s[-patience:]) <= max(f1s[:-patience])
 
 
 def temperature_at(arm: Arm, step: int) -> float:
@@ -198,29 +213,47 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
     module.train()
     head_params = {id(p) for p in head.parameters()}
     trainable = [p for p in module.parameters() if p.requires_grad]
-    optimizer = torch.optim.Adam([
-        {"params": [p for p in trainable if id(p) not in head_params]},
-        {"params": [p for p in trainable if id(p) in head_params], "lr": spec.lr * spec.offset_lr_scale},
-    ], lr=spec.lr, betas=(0.9, 0.999))
+
+    def adam(lr: float) -> torch.optim.Optimizer:
+        return torch.optim.Adam([
+            {"params": [p for p in trainable if id(p) not in head_params]},
+            {"params": [p for p in trainable if id(p) in head_params], "lr": lr * spec.offset_lr_scale},
+        ], lr=lr, betas=(0.9, 0.999))
+
+    optimizer = adam(spec.place_lr if spec.place_steps and spec.place_lr else spec.lr)
     generator = torch.Generator().manual_seed(seed)
     loader = iter(DataLoader(train, batch_size=batch_size, shuffle=True, generator=generator, drop_last=True))
     torch.manual_seed(seed)
-    rows = [{"step": 0, **validate(module, val_batch, spec)}]
+    rows = [{"step": 0, "phase": "placed" if spec.place_steps else "free", **validate(module, val_batch, spec)}]
     print(arm, rows[-1], flush=True)
-    for step in range(1, steps + 1):
+    placed_until, last = spec.place_steps, steps
+    step = 0
+    while step < last:
+        step += 1
+        placing = step <= placed_until
         temperature[0] = temperature_at(spec, step)
         batch = next(loader)
         module.train()
         out = forward(module, batch["frames"], batch["future_length"], spec)
-        loss = arm_loss(module, batch["frames"], batch["future_length"], out, spec.expected)["loss"]
-        if step <= spec.place_steps:  # labels place the start, then the paper's loss alone
+        terms = arm_loss(module, batch["frames"], batch["future_length"], out, spec.expected)
+        loss = terms["loss"]
+        if placing:  # labels place the start, then the paper's loss alone
+            if not spec.place_inter:
+                loss = loss - terms["inter_expected" if spec.expected else "inter"]
             loss = loss + spec.place_weight * placement_loss(out["offset_probs"], batch["keyframes"], batch["future_length"])
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
         if step % every == 0:
-            rows.append({"step": step, **validate(module, val_batch, spec)})
+            rows.append({"step": step, "phase": "placed" if placing else "free", **validate(module, val_batch, spec)})
             print(arm, rows[-1], flush=True)
+            placed_f1s = [row["f1"] for row in rows if row["phase"] == "placed"]
+            if placing and (step == placed_until or placement_over(placed_f1s, spec.place_patience)):
+                placed_until = step
+                if spec.release_steps:
+                    last = step + spec.release_steps
+                if spec.place_lr:
+                    optimizer = adam(spec.lr)
     return rows
 
 
@@ -258,11 +291,11 @@ def main() -> None:
         f"{date.today()}, {minutes:.0f} min). Columns: argmax-offset F1, interior keyframes per clip, distinct patterns, "
         "the loss and its terms (nats per clip) and δ's entropy on the validation clips.",
         "",
-        "| arm | step | F1 | keys/clip | patterns | loss | L_inter | L_inter, expected error | L_ke | KL | δ entropy |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| arm | step | phase | F1 | keys/clip | patterns | loss | L_inter | L_inter, expected error | L_ke | KL | δ entropy |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for arm, rows in results.items():
-        lines += [f"| {arm} | {r['step']} | {r['f1']:.3f} | {r['keys']:.2f} | {r['patterns']:.0f} | {r['loss']:.1f} | "
+        lines += [f"| {arm} | {r['step']} | {r['phase']} | {r['f1']:.3f} | {r['keys']:.2f} | {r['patterns']:.0f} | {r['loss']:.1f} | "
                   f"{r['inter']:.1f} | {r['inter_expected']:.1f} | {r['key_emb']:.2f} | {r['kl']:.1f} | {r['entropy']:.2f} |" for r in rows]
     publish("\n".join(lines) + "\n", args.out)
     if args.json:

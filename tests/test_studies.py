@@ -10,7 +10,7 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from readout_chain import joint_offset_keyframes, offset_log_probs  # noqa: E402
-from warm_start_arms import placement_loss  # noqa: E402
+from warm_start_arms import placement_loss, placement_over  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -37,6 +37,15 @@ def test_the_joint_readout_is_the_most_likely_offset_path():
     lengths = torch.tensor([4, 7, 9, 2, 5])
     found = joint_offset_keyframes(log_offsets, lengths)
     assert found == [brute_force_joint(log_offsets[b], int(lengths[b])) for b in range(5)]
+
+
+def test_the_placement_ends_when_the_f1_has_not_risen_for_patience_validations():
+    assert not placement_over([0.1, 0.3, 0.5], 2)
+    assert not placement_over([0.1, 0.5, 0.4], 2)  # one validation without a rise
+    assert placement_over([0.1, 0.5, 0.4, 0.5], 2)  # equal to the best is no rise
+    assert not placement_over([0.1, 0.5, 0.4, 0.6], 2)
+    assert not placement_over([0.1, 0.2, 0.1, 0.1], 0)  # no patience: only the step budget ends it
+    assert not placement_over([0.1, 0.1], 2)  # too few validations to judge
 
 
 def test_offset_log_probs_along_a_path_are_the_chains_logits():
