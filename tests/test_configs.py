@@ -18,11 +18,15 @@ from keyin.planning.servo import ServoParams
 from tests.cli.runner import error_line, run
 from tests.configs import CONFIGS, OLD_SMOKE, OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
 
+ROOT = Path(__file__).parents[1]
 OLD_COMMANDS = json.loads((Path(__file__).parent / "reference" / "old_commands.json").read_text())
 
 # The old presets priced keyframes at 120 nats on pushing outside scale=cpu (read only by discovery=map).
 OLD_PUSHING_PRICE = ("model.keyframes.map_keyframe_cost=120.0",)
 OLD_CONSTANT_OFFSET = {"brownian": 6, "pushing": 4}
+# keyin 0.1 froze all of stage 1 in stage 2 and fed its interpolator the soft δ on every frame model; backbone=paper
+# now carries the paper's stated pair instead, LSTM_inter alone and δ̂ (docs/decisions.md, 2026-12-06).
+OLD_STAGE2 = ("model.keyframes.frozen=stage1", "model.keyframes.delta_input=soft")
 # keyin 0.1's teacher had no price per keyframe (outside scale=smoke) and taught interior keyframes only.
 OLD_TEACHER = ("model.keyframes.teacher_keyframe_cost=0.0", "model.keyframes.teacher_leaves=false")
 
@@ -44,6 +48,8 @@ def new_command(scale: str, dataset: str, model: str) -> list[str]:
         overrides += OLD_TEACHER
     if scale != "cpu" and dataset == "pushing" and trains_two_stages:
         overrides += OLD_PUSHING_PRICE
+    if trains_two_stages and "backbone=ours" not in overrides and new_model(scale, model) != "keyin_plus":
+        overrides += OLD_STAGE2  # backbone=paper's stage-2 pair
     if model == "constant":  # keyin 0.1's fixed spacings; today's is chosen on validation clips
         overrides.append(f"dataset.tuned.constant_offset={OLD_CONSTANT_OFFSET[dataset]}")
     return overrides
@@ -231,7 +237,8 @@ def test_the_stated_configuration_composes_to_every_value_the_paper_states():
         cfg = resolve("train", ["experiment=brownian_keyin_stated"])
         paper_budget = resolve("train", ["experiment=brownian_keyin_stated", "scale.stage1_steps=100000",
                                          "scale.stage2_steps=200000"])
-    for composed in (cfg, paper_budget):
+        paper_scale = resolve("train", ["model=keyin", "scale=paper"])  # the paper's method at the paper's scale
+    for composed in (cfg, paper_budget, paper_scale):
         for key, value in STATED.items():
             node = composed
             for part in key.split("."):
@@ -243,3 +250,22 @@ def test_the_stated_configuration_composes_to_every_value_the_paper_states():
     assert (cfg["scale"]["stage1_steps"], cfg["scale"]["stage2_steps"]) == (10_000, 20_000)
     assert cfg["model"]["name"] == "keyin_paper_stated_20k"  # the budget in the row's name
     assert (paper_budget["scale"]["stage1_steps"], paper_budget["scale"]["stage2_steps"]) == (100_000, 200_000)
+    assert (paper_scale["scale"]["stage1_steps"], paper_scale["scale"]["stage2_steps"]) == (100_000, 200_000)
+
+
+def test_the_stated_rows_job_config_holds_every_value_the_paper_states():
+    job = OmegaConf.load(ROOT / "docs/results/keyin_paper_stated/jobs/stated_seed0/config.yaml")  # as the job ran
+    for key, value in STATED.items():
+        assert OmegaConf.select(job, key) == value, (key, OmegaConf.select(job, key), value)
+    assert job.model.name == "keyin_paper_stated_20k"
+
+
+def test_our_frame_model_keeps_what_the_keyin_paper_rows_ran():
+    # Table 1's keyin_paper rows ran on backbone=ours when model=keyin froze all of stage 1 and fed it the soft δ (their
+    # committed job configs predate both keys): backbone=ours must compose the same pair, backbone=paper the paper's
+    with initialize_config_module(CONFIG_MODULE, version_base="1.3"):
+        ours = resolve("train", ["experiment=brownian_table1", "model=keyin_paper"])["model"]["keyframes"]
+        paper = resolve("train", ["experiment=brownian_table1", "model=keyin_paper", "backbone=paper"])["model"]["keyframes"]
+    assert OmegaConf.load(ROOT / "docs/results/brownian_table1/jobs/keyin_paper_seed1/config.yaml").backbone.name == "ours"
+    assert (ours["frozen"], ours["delta_input"]) == ("stage1", "soft")
+    assert (paper["frozen"], paper["delta_input"]) == ("lstm_inter", "argmax")
