@@ -24,7 +24,7 @@ validation clips and logs each term of the loss there. The arms change one chann
   configuration's ``experiment=brownian_keyin_stated``) on the checkpoint's stage 1, its first 300 steps the paper's loss plus
   100 × the cross-entropy of δ^t at the labelled offsets (labels only place the start), then the paper's loss alone;
 - ``placed_supervised``: as ``placed``, but the placement trains on the labels alone (100 × the cross-entropy of δ^t at the
-  labelled offsets, with L_ke and the KL, without L_inter) at lr 1e-3 until the validation F1 has not risen for two
+  labelled offsets, with L_ke and the KL, without L_inter) at lr 1e-3 until the validation F1 has not risen for five
   validations (at most 1500 steps), then 500 steps of the paper's loss alone at the stated lr 2e-4 with a fresh Adam;
 - ``sampled_lr1e-4`` / ``mean_lr1e-4``: the same at a tenth of the learning rate;
 - ``expected``: as ``sampled``, but L_inter scores each interpolated frame against the frame it may land on,
@@ -103,7 +103,7 @@ ARMS = {
     "scratch_frames_kl0": Arm(scratch=True, tie="interpolator", uniform_init=True, beta_kl=0.0),
     # a fresh predictor (--scratch-overrides: the stated configuration's) placed at the labelled offsets, then the paper's loss
     "placed": Arm(scratch=True, place_steps=300, lr=2e-4),
-    "placed_supervised": Arm(scratch=True, place_steps=1500, lr=2e-4, place_inter=False, place_lr=1e-3, place_patience=2,
+    "placed_supervised": Arm(scratch=True, place_steps=1500, lr=2e-4, place_inter=False, place_lr=1e-3, place_patience=5,
                              release_steps=500),
 }
 SCRATCH_OVERRIDES = ["model=keyin_paper", "backbone=ours", "scale=cpu"]  # the Table 1 rows' keyin_paper
@@ -138,8 +138,8 @@ def placement_loss(offset_probs: torch.Tensor, keyframes: torch.Tensor, lengths:
 
 
 def placement_over(f1s: list[float], patience: int) -> bool:
-    """Whether a placement whose validation F1 so far is ``f1s`` (the first at step 0) ends: the last ``patience``
-    validations did not beat the best before them."""
+    """Whether a placement whose validation F1 so far is ``f1s`` (from its first validation after step 0) ends: the last
+    ``patience`` validations did not beat the best before them."""
     return 0 < patience < len(f1s) and max(f1s[-patience:]) <= max(f1s[:-patience])
 
 
@@ -247,7 +247,7 @@ def run_arm(ckpt: str, arm: str, train, val_batch: dict, steps: int, every: int,
         if step % every == 0:
             rows.append({"step": step, "phase": "placed" if placing else "free", **validate(module, val_batch, spec)})
             print(arm, rows[-1], flush=True)
-            placed_f1s = [row["f1"] for row in rows if row["phase"] == "placed"]
+            placed_f1s = [row["f1"] for row in rows[1:] if row["phase"] == "placed"]  # the untrained start aside
             if placing and (step == placed_until or placement_over(placed_f1s, spec.place_patience)):
                 placed_until = step
                 if spec.release_steps:
