@@ -2,6 +2,7 @@
 travel in bfloat16 and come back as the weights' float32, the weights and the step exactly."""
 
 import importlib.util
+import json
 from pathlib import Path
 
 import torch
@@ -47,3 +48,24 @@ def test_restore_puts_the_carried_file_where_the_job_resumes_and_never_over_a_ne
     target.write_bytes(b"newer")
     carry.restore(jobs, "stated_seed0")
     assert target.read_bytes() == b"newer"
+
+
+def test_a_stage_2_job_is_carried_under_its_own_name_and_restored_to_its_keyframes_checkpoint(tmp_path, monkeypatch):
+    monkeypatch.setattr(carry, "ROOT", tmp_path)
+    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
+    monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
+    carry.MANIFEST.parent.mkdir(parents=True)
+    carry.MANIFEST.write_text('{"models": []}')
+    jobs = tmp_path / "jobs"
+    (jobs / "stated_stage2_seed1" / ".hydra").mkdir(parents=True)
+    (jobs / "stated_stage2_seed1" / ".hydra" / "config.yaml").write_text("model:\n  name: keyin_paper_stated_10k_5k\n")
+    source = carry.job_checkpoint(jobs, "stated_stage2_seed1", "keyframes")
+    source.parent.mkdir(parents=True)
+    torch.save({"state_dict": {"w": torch.ones(2)}, "optimizer_states": [], "global_step": 500}, source)
+    target = carry.save(jobs, "stated_stage2_seed1", "keyframes")
+    assert target.name == "stated_stage2_seed1_stage2_last.ckpt"
+    entry = json.loads(carry.MANIFEST.read_text())["models"][0]
+    assert (entry["stage"], entry["model"], entry["path"]) == ("keyframes", "keyin_paper_stated_10k_5k", "models/in_progress/stated_stage2_seed1_stage2_last.ckpt")
+    source.unlink()
+    carry.restore(jobs, "stated_stage2_seed1", "keyframes")
+    assert torch.load(source, weights_only=False)["global_step"] == 500

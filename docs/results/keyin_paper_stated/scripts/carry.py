@@ -7,6 +7,7 @@ bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' 
 
     python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>      # e.g. /work/jobs stated_seed0
     python docs/results/keyin_paper_stated/scripts/carry.py restore <jobs dir> <job>
+    python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> stated_stage2_seed1 --stage keyframes
 """
 
 from __future__ import annotations
@@ -16,18 +17,31 @@ import json
 from pathlib import Path
 
 import torch
+from omegaconf import OmegaConf
 
 from keyin.io import atomic_write_text, sha256_of
 
 ROOT = Path(__file__).resolve().parents[4]
 FOLDER = ROOT / "models" / "in_progress"
 MANIFEST = ROOT / "models" / "manifest.json"
-COMMAND = "sh docs/results/keyin_paper_stated/scripts/stage1.sh <seed> <jobs dir> <data dir>"
-EXPORT = "python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>"
+STAGES = {  # stage → (the name it carries in models/in_progress/, the command that trains it)
+    "interpolator": ("stage1", "sh docs/results/keyin_paper_stated/scripts/stage1.sh <seed> <jobs dir> <data dir>"),
+    "keyframes": ("stage2", "sh docs/results/keyin_paper_stated/scripts/stage2.sh <seed> <steps> <jobs dir> <data dir>"),
+}
+EXPORT = "python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job> --stage <stage>"
 
 
-def job_checkpoint(jobs: Path, job: str) -> Path:
-    return jobs / job / "checkpoints" / "interpolator" / "last.ckpt"
+def job_checkpoint(jobs: Path, job: str, stage: str = "interpolator") -> Path:
+    return jobs / job / "checkpoints" / stage / "last.ckpt"
+
+
+def job_model(jobs: Path, job: str) -> str:
+    """The row name the job runs under (its Hydra config's ``model.name``)."""
+    return str(OmegaConf.load(jobs / job / ".hydra" / "config.yaml").model.name)
+
+
+def carried(job: str, stage: str = "interpolator") -> Path:
+    return FOLDER / f"{job}_{STAGES[stage][0]}_last.ckpt"
 
 
 def slimmed(checkpoint: dict) -> dict:
@@ -40,18 +54,18 @@ def slimmed(checkpoint: dict) -> dict:
     return checkpoint
 
 
-def save(jobs: Path, job: str) -> Path:
-    source = job_checkpoint(jobs, job)
+def save(jobs: Path, job: str, stage: str = "interpolator") -> Path:
+    source = job_checkpoint(jobs, job, stage)
     checkpoint = torch.load(source, map_location="cpu", weights_only=False)
-    target = FOLDER / f"{job}_stage1_last.ckpt"
+    target = carried(job, stage)
     FOLDER.mkdir(parents=True, exist_ok=True)
     partial = target.with_suffix(".ckpt.partial")
     torch.save(slimmed(checkpoint), partial)
     partial.replace(target)
     card = {
-        "file": target.name, "bytes": target.stat().st_size, "sha256": sha256_of(target), "command": COMMAND,
-        "source_sha256": sha256_of(source), "global_step": checkpoint["global_step"], "stage": "interpolator",
-        "model": "keyin_paper_stated_20k", "dataset": "brownian",
+        "file": target.name, "bytes": target.stat().st_size, "sha256": sha256_of(target), "command": STAGES[stage][1],
+        "source_sha256": sha256_of(source), "global_step": checkpoint["global_step"], "stage": stage,
+        "model": job_model(jobs, job), "dataset": "brownian",
     }
     cards_path = FOLDER / "models.json"
     cards = json.loads(cards_path.read_text()) if cards_path.is_file() else {}
@@ -67,8 +81,8 @@ def save(jobs: Path, job: str) -> Path:
     return target
 
 
-def restore(jobs: Path, job: str) -> None:
-    source, target = FOLDER / f"{job}_stage1_last.ckpt", job_checkpoint(jobs, job)
+def restore(jobs: Path, job: str, stage: str = "interpolator") -> None:
+    source, target = carried(job, stage), job_checkpoint(jobs, job, stage)
     if target.is_file():
         print(f"{target} exists: the job resumes from it")
         return
@@ -85,8 +99,9 @@ def main() -> None:
     parser.add_argument("action", choices=("save", "restore"))
     parser.add_argument("jobs", type=Path)
     parser.add_argument("job")
+    parser.add_argument("--stage", choices=tuple(STAGES), default="interpolator")
     args = parser.parse_args()
-    (save if args.action == "save" else restore)(args.jobs, args.job)
+    (save if args.action == "save" else restore)(args.jobs, args.job, args.stage)
 
 
 if __name__ == "__main__":
