@@ -320,7 +320,10 @@ def main() -> None:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({"clips": len(clips.truth), "date": str(date.today()), **results}, indent=1))
     seconds = time.perf_counter() - started
-    command = f"python studies/paper_loss_truth.py {args.ckpt} --clips {args.clips} --steps {args.steps} --lr {args.lr}"
+    command = (f"python studies/paper_loss_truth.py {args.ckpt}" + (f" --stage {args.stage}" if args.stage != "keyframes" else "")
+               + f" --clips {args.clips} --steps {args.steps} --lr {args.lr}"
+               + (f" --readings {' '.join(args.readings)}" if len(args.readings) < len(READINGS) else "")
+               + (" --uniform" if args.uniform else ""))
     lines = [
         f"# Does the paper's loss hold the true keyframes? Stage 1 of `{args.ckpt}`",
         "",

@@ -11,6 +11,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from readout_chain import joint_offset_keyframes, offset_log_probs  # noqa: E402
 from warm_start_arms import placement_loss, placement_over  # noqa: E402
+from stage1_latent_use import latent_use  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -75,3 +76,20 @@ def test_the_placement_loss_is_the_cross_entropy_of_delta_at_the_labelled_offset
     probs[0, :, 2] = 0.7  # offset 3 at 0.7 in every slot
     expected = -(3 * math.log(0.7) + math.log(0.1))  # slots 1-3 at offset 3, slot 4 at offset S = 4
     torch.testing.assert_close(placement_loss(probs, keyframes, torch.tensor([8])), torch.tensor(expected))
+
+
+def test_latent_use_leaves_batchnorm_as_it_was_and_a_deterministic_interpolator_ignores_the_latent():
+    from tests.lit import tiny_models
+
+    stochastic, deterministic = tiny_models.stage1("paper", latent_dim=2), tiny_models.stage1("paper", latent_dim=0)
+    stochastic.train(False)
+    before = {name: buffer.clone() for name, buffer in stochastic.named_buffers()}
+    row = latent_use(stochastic, tiny_models.batch())
+    assert all(torch.equal(buffer, before[name]) for name, buffer in stochastic.named_buffers())
+    assert not stochastic.training
+    assert row["train_kl"] > 0 and row["train_posterior"] != row["train_prior"]
+    row = latent_use(deterministic, tiny_models.batch())
+    for mode in ("train", "eval", "decoder_train"):
+        assert row[f"{mode}_posterior"] == row[f"{mode}_prior"] == row[f"{mode}_mean"]
+        assert row[f"{mode}_kl"] == 0
+    assert row["eval_posterior"] != row["train_posterior"]  # BatchNorm: running against batch statistics
