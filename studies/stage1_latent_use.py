@@ -94,6 +94,7 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=250)
     parser.add_argument("--batch-size", type=int, default=30)
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--save", type=Path, help="with --steps: write the trained-on stage 1 here, as a stage-1 checkpoint")
     args = parser.parse_args()
     torch.manual_seed(0)
     module, config = load_trained_module(args.ckpt, "interpolator")
@@ -102,6 +103,14 @@ def main() -> None:
     if args.steps:
         train = split_clips(dataset, instantiate(dataset.generator), "train", 100_000, args.data_dir)
         rows = go_on_training(module, train, batch, args.kl_weight, args.steps, args.every, args.batch_size)
+        if args.save:  # the checkpoint's own format, its weights and KL weight replaced (studies/paper_loss_truth.py reads it)
+            checkpoint = torch.load(args.ckpt, map_location="cpu", weights_only=False)
+            checkpoint["state_dict"] = module.state_dict()
+            checkpoint["hyper_parameters"]["kl_weight"] = args.kl_weight
+            checkpoint["global_step"] += args.steps
+            checkpoint.pop("optimizer_states", None)
+            args.save.parent.mkdir(parents=True, exist_ok=True)
+            torch.save(checkpoint, args.save)
     else:
         rows = [{"step": 0, **latent_use(module, batch)}]
     minutes = (time.perf_counter() - started) / 60
