@@ -1,26 +1,28 @@
 #!/bin/sh
-# Restart the stated configuration's jobs at the start of a session (issue 62): a frozen checkout of the commit the jobs
-# started with, a venv that borrows the main checkout's packages, then stage 1 of seed 0 resumed in the background from
-# <jobs>/stated_seed0/checkpoints/interpolator/last.ckpt, put there from models/in_progress/ by carry.py when the machine
-# was replaced (a fresh start if nothing was carried).
-#   sh docs/results/keyin_paper_stated/scripts/restart.sh [<jobs dir> [<frozen dir>]]     (from the main checkout, .venv installed)
+# Restart the stated configuration's background jobs at the start of a session (issue 62): for each line of jobs.txt, a
+# frozen checkout of the commit the job started with, a venv that borrows the main checkout's packages, the job's carried
+# checkpoint put back (carry.py restore, when the machine was replaced), then stage1.sh resumed in the background.
+#   sh docs/results/keyin_paper_stated/scripts/restart.sh [<jobs dir>]     (from the main checkout, .venv installed)
 set -eu
 main=$(git rev-parse --show-toplevel)
 jobs=${1:-/work/jobs}
-frozen=${2:-/work/frozen62}
-commit=93cb072  # the code stage 1 of seed 0 started with (2026-12-06)
+scripts="$main/docs/results/keyin_paper_stated/scripts"
 mkdir -p "$jobs"
-[ -d "$frozen" ] || git -C "$main" worktree add --detach "$frozen" "$commit"
-if [ ! -x "$frozen/.venv/bin/keyin-train" ]; then
-  python3 -m venv "$frozen/.venv"
-  site=$("$main/.venv/bin/python" -c 'import site; print(site.getsitepackages()[0])')
-  echo "$site" > "$("$frozen/.venv/bin/python" -c 'import site; print(site.getsitepackages()[0])')/main_deps.pth"
-  "$frozen/.venv/bin/pip" install -q --no-deps -e "$frozen"
-fi
-[ -e "$frozen/data" ] || ln -s "$main/data" "$frozen/data"
 "$main/.venv/bin/keyin-generate" dataset=brownian 'splits={val: 1000, test: 1000}' data_dir="$main/data" > /dev/null  # skips finished shards
-"$main/.venv/bin/python" "$main/docs/results/keyin_paper_stated/scripts/carry.py" restore "$jobs" stated_seed0
-cd "$frozen"
-PATH="$frozen/.venv/bin:$PATH" nohup sh docs/results/keyin_paper_stated/scripts/stage1.sh 0 "$jobs" "$main/data" \
-  >> "$jobs/stated_seed0_stage1.log" 2>&1 &
-echo "stage 1 of seed 0 resumed in the background (pid $!); log: $jobs/stated_seed0_stage1.log"
+grep -v '^#' "$scripts/jobs.txt" | while read -r frozen commit seed job overrides; do
+  job=${job:-stated_seed$seed}
+  if pgrep -f "hydra.run.dir=$jobs/$job " > /dev/null; then echo "$job is running already"; continue; fi
+  [ -d "$frozen" ] || git -C "$main" worktree add --detach "$frozen" "$commit"
+  if [ ! -x "$frozen/.venv/bin/keyin-train" ]; then
+    python3 -m venv "$frozen/.venv"
+    site=$("$main/.venv/bin/python" -c 'import site; print(site.getsitepackages()[0])')
+    echo "$site" > "$("$frozen/.venv/bin/python" -c 'import site; print(site.getsitepackages()[0])')/main_deps.pth"
+    "$frozen/.venv/bin/pip" install -q --no-deps -e "$frozen"
+  fi
+  [ -e "$frozen/data" ] || ln -s "$main/data" "$frozen/data"
+  "$main/.venv/bin/python" "$scripts/carry.py" restore "$jobs" "$job"
+  # shellcheck disable=SC2086  # the overrides are words
+  (cd "$frozen" && PATH="$frozen/.venv/bin:$PATH" nohup sh docs/results/keyin_paper_stated/scripts/stage1.sh "$seed" "$jobs" \
+    "$main/data" "$job" $overrides >> "$jobs/${job}_stage1.log" 2>&1 &)
+  echo "$job resumed in the background in $frozen; log: $jobs/${job}_stage1.log"
+done
