@@ -10,9 +10,10 @@ samples its latent "from the prior when training the keyframe predictor". It doe
 keyin sums the image BCE over pixels and frames; against a BCE averaged per pixel (SVG's convention for its image
 term) the same weight is C·H·W times stronger. This study scores stage 1 on validation clips, cut into segments as stage 1
 trains (offsets ``offset_min``..``offset_max``): the BCE per frame with the latent from the posterior (what stage 1
-trains on), from the prior (what stage 2 reads) and at the prior's mean, in train mode (batch statistics) and eval mode
-(BatchNorm's running statistics) and eval mode with the decoder alone in train mode, and the KL per segment. With ``--steps`` it first goes on training stage 1 from the
-checkpoint with another KL weight (Adam at the checkpoint's lr, fresh moments) and scores it every ``--every`` steps.
+trains on), from the prior (what stage 2 reads) and at the prior's mean, in train mode (batch statistics), eval mode
+(BatchNorm's running statistics) and eval mode with the decoder alone in train mode, and the KL per segment. With
+``--steps`` it first goes on training stage 1 from the checkpoint with another KL weight (Adam at the checkpoint's lr,
+fresh moments) and scores it every ``--every`` steps.
 """
 
 from __future__ import annotations
@@ -61,7 +62,8 @@ def latent_use(module, batch: dict) -> dict[str, float]:
             row[f"{mode}_{latent}"] = (bce.sum() / count.sum()).item()
             if latent == "posterior":
                 row[f"{mode}_kl"] = kl.mean().item()
-        module.load_state_dict({**module.state_dict(), **running})
+        for name, buffer in module.named_buffers():
+            buffer.copy_(running[name])
     module.train(was)
     return row
 
@@ -96,6 +98,8 @@ def main() -> None:
     parser.add_argument("--json", type=Path)
     parser.add_argument("--save", type=Path, help="with --steps: write the trained-on stage 1 here, as a stage-1 checkpoint")
     args = parser.parse_args()
+    if args.steps and args.kl_weight is None:
+        parser.error("--steps trains stage 1 on: give the KL weight it trains with, --kl-weight W")
     torch.manual_seed(0)
     module, config = load_trained_module(args.ckpt, "interpolator")
     dataset, batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
