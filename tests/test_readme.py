@@ -67,7 +67,7 @@ def report_f1(report: str) -> dict[str, tuple[str, str, int]]:
 
 def readme_method(label: str) -> str:
     """A README row's method: the last `name` in its label, else its first word (``Jumpy`` → jumpy)."""
-    named = re.findall(r"`([a-z0-9_]+)`", label)
+    named = re.findall(r"`([a-z0-9_]+(?: · [a-z0-9_= ]+)?)`", label)  # a row's changed choices after a ·
     return named[-1] if named else label.split()[0].lower()
 
 
@@ -102,17 +102,18 @@ def test_the_readme_table1_figures_are_those_of_the_linked_reports():
 def test_the_readme_method_of_a_row_label():
     assert readme_method("KEYIN + ours, `map` (`keyin_plus`)") == "keyin_plus"
     assert readme_method("Constant (every 5 frames)") == "constant"
+    assert readme_method("the paper's loss (`keyin_paper · backbone=ours scale=cpu`)") == "keyin_paper · backbone=ours scale=cpu"
 
 
 def test_what_the_readme_says_the_keyin_paper_rows_ran_is_what_their_job_configs_hold():
-    """README's Methods and Results describe the `keyin_paper` rows as the paper's loss at CPU sizes on our frame
-    model (2-2.5k + 1.5k steps, all of stage 1 frozen, soft δ); every committed job config of those rows agrees."""
+    """README's Methods and Results describe Table 1's rows of the paper's KEYIN as its loss at CPU sizes on our frame
+    model (2-2.5k + 1.5k steps, all of stage 1 frozen, soft δ), named so; every committed job config of those rows agrees."""
     import yaml
 
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     methods = next(line for line in text.splitlines() if line.startswith("| `keyin` (rows say `keyin_paper`)"))
     assert "`scale=cpu` on `backbone=ours`, all of stage 1 frozen, soft δ" in methods
-    assert "| the paper's loss, CPU sizes, our frame model, 2-2.5k + 1.5k steps (`keyin_paper`) |" in text
+    assert "| the paper's loss, CPU sizes, our frame model, 2-2.5k + 1.5k steps (`keyin_paper · backbone=ours scale=cpu`) |" in text
     configs = sorted(ROOT.glob("docs/results/*_table1/jobs/keyin_paper_seed*/config.yaml"))
     assert len(configs) >= 9  # Brownian, pushing and Meta-World, 3 seeds each
     for path in configs:

@@ -62,8 +62,8 @@ def example_predictions(records: list[dict], dataset: str) -> tuple[Path, dict[s
         if record["dataset"] != dataset or record["method"] in predicted or not path.is_file():
             continue
         saved = json.loads(path.read_text())
-        if record["method"] in saved["predicted"]:
-            predicted[record["method"]] = saved["predicted"][record["method"]]
+        if record["saved_as"] in saved["predicted"]:  # the job's own name for its method (a row may rename it)
+            predicted[record["method"]] = saved["predicted"][record["saved_as"]]
             truth, job = saved["truth"], Path(record["path"])
     return job, {method: predicted[method] for method in sorted(predicted, key=method_sort_key)}, truth
 

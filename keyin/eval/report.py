@@ -28,6 +28,9 @@ PAPER_TABLE1 = {
     "pushing": {"random": 0.18, "constant": 0.23, "static": 0.18, "surprise": 0.10, "keyin_paper": 0.30, "keyin_plus": 0.30},
 }
 PAPER_ROWS = ("random", "constant", "static", "jumpy", "surprise", "keyin_paper")  # the paper's methods, as published
+PAPER_METHOD = "keyin_paper"  # the paper's KEYIN; rows named keyin_paper_<choice> change the choice their name gives
+STATED_ROWS = "keyin_paper_stated"  # rows running every choice the paper states, the budget in their name (docs/decisions.md)
+STATED_RUN = {"backbone": "paper", "scale": "paper"}  # the frame model and sizes the paper states (metrics.json's keys)
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "f1_tol2_interior", "f1_tol2", "precision", "recall",
@@ -93,11 +96,23 @@ def collect_metrics(root: Roots) -> list[dict[str, Any]]:
             raise ValueError(f"{folder / 'metrics.json'} lacks {', '.join(missing)}: not a keyin metrics.json")
         common = {key: metrics.get(key) for key in ("dataset", "seed", "scale")}
         common.update(seed=metrics.get("seed", 0), path=str(folder))
-        rename = current_name if "keyin_version" not in metrics else lambda name: name
-        records.append({**metrics, **common, "method": rename(metrics["method"])})
+        def rename(name: str, metrics: dict[str, Any] = metrics) -> str:
+            return named_as_run(name if "keyin_version" in metrics else current_name(name), metrics)
+
+        records.append({**metrics, **common, "method": rename(metrics["method"]), "saved_as": metrics["method"]})
         for name, scores in metrics.get("variants", {}).items():
-            records.append({**scores, **common, "method": rename(name)})
+            records.append({**scores, **common, "method": rename(name), "saved_as": name})
     return records
+
+
+def named_as_run(method: str, metrics: dict[str, Any]) -> str:
+    """The row name of a job of the paper's method (``keyin_paper``, ``keyin_paper_<choice>``) that changed the frame
+    model or sizes the paper states names them, as the overrides that ran it: ``keyin_paper · backbone=ours scale=cpu``;
+    so a row named plain ``keyin_paper`` ran the stated ones (issue 62). Other methods keep their names."""
+    if not method.startswith(PAPER_METHOD):
+        return method
+    changed = [f"{key}={metrics[key]}" for key, stated in STATED_RUN.items() if metrics.get(key) not in (None, stated)]
+    return f"{method} · {' '.join(changed)}" if changed else method
 
 
 def current_name(method: str) -> str:
@@ -108,9 +123,19 @@ def current_name(method: str) -> str:
 
 
 def row_source(method: str) -> str:
-    """``paper`` for a method as the paper published it (:data:`PAPER_ROWS`), ``ours`` for our
-    additions and variants (keyin_plus, change-point, Surprise without its shift, ...)."""
-    return "paper" if method in PAPER_ROWS else "ours"
+    """``paper`` for a method as the paper published it (:data:`PAPER_ROWS`, and the rows of every stated choice),
+    ``changed`` for the paper's KEYIN with the choices its name gives changed (:func:`named_as_run`, the grid's
+    ``keyin_paper_<choice>``), ``ours`` for our additions and variants (keyin_plus, change-point, Surprise without its
+    shift, ...)."""
+    if method in PAPER_ROWS or method.startswith(STATED_ROWS) and " · " not in method:
+        return "paper"
+    return "changed" if method.startswith(PAPER_METHOD) else "ours"
+
+
+def paper_figure(dataset: str, method: str) -> float | None:
+    """The paper's Table 1 F1 beside a row: its own, or KEYIN's beside every row of the paper's KEYIN."""
+    figures = PAPER_TABLE1.get(dataset, {})
+    return figures.get(PAPER_METHOD if method.startswith(PAPER_METHOD) else method)
 
 
 def method_sort_key(method: str) -> tuple[int, int, str]:
@@ -162,7 +187,7 @@ def summarise(records: Iterable[dict[str, Any]]) -> list[TableRow]:
                 seeds=sorted(by_seed),
                 mean=mean,
                 std={score: float(v.std(ddof=ddof)) for score, v in values.items()},
-                paper_f1=PAPER_TABLE1.get(dataset, {}).get(method),
+                paper_f1=paper_figure(dataset, method),
                 timed_seeds=sorted(seed for seed, timed in zip(by_seed, recorded) if timed),
             )
         )
@@ -210,7 +235,7 @@ def markdown_table(rows: list[TableRow]) -> str:
     """Table 1 as Markdown: F1 mean ± std over seeds in the information rule's two columns
     (interior, with ends; docs/evaluation.md) and as the method gives its keyframes, the paper's F1,
     and companions, each job's wall time in its process (mean over seeds; a stage 1 shared by several
-    jobs counts in the one that trained it, a resumed job its last part only); the paper's methods first, our additions after them (``row``: paper or ours) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
+    jobs counts in the one that trained it, a resumed job its last part only); the paper's methods first, our additions after them (``row``: :func:`row_source`) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
     lines = [
         "| dataset | method | row | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
         "| ±2 F1 interior | precision | recall | keyframes/clip | Hausdorff | train + score (min) | seeds |",

@@ -25,7 +25,8 @@ def save_f1_bars(
     paper: Sequence[float | None],
     path: Path,
 ) -> Path:
-    """Bars of our F1 (mean ± std over seeds), one panel per dataset, the paper's F1 as a black tick.
+    """Horizontal bars of our F1 (mean ± std over seeds), one panel per dataset, the paper's F1 as a black tick;
+    the rows read top to bottom in the table's order, their names in full.
 
     Args:
         datasets, methods: (n,) each bar's panel and label, drawn in this order within a panel.
@@ -35,19 +36,21 @@ def save_f1_bars(
     if not len(datasets) == len(methods) == len(means) == len(stds) == len(paper):
         raise ValueError("save_f1_bars needs one dataset, method, mean, std and paper F1 per bar")
     panels = sorted(set(datasets))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.5 * len(panels), 3.4), squeeze=False)
+    most = max(sum(name == dataset for name in datasets) for dataset in panels)
+    fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 1.2 + 0.28 * most), squeeze=False)
     for ax, dataset in zip(axes[0], panels):
         mine = [i for i, name in enumerate(datasets) if name == dataset]  # its bars, in order
-        x = np.arange(len(mine))
-        ax.bar(x, [means[i] for i in mine], yerr=[stds[i] for i in mine], capsize=3, color="tab:blue", label="ours")
-        theirs = [(j, paper[i]) for j, i in enumerate(mine) if paper[i] is not None]
+        y = np.arange(len(mine))
+        ax.barh(y, [means[i] for i in mine], xerr=[stds[i] for i in mine], capsize=3, color="tab:blue", label="ours")
+        theirs = [(paper[i], j) for j, i in enumerate(mine) if paper[i] is not None]
         if theirs:
-            ax.scatter(*zip(*theirs), marker="_", s=400, color="black", linewidths=2, label="paper", zorder=3)
-        ax.set_xticks(x, [methods[i] for i in mine], rotation=30, ha="right")
-        ax.set_ylim(0, 1)
-        ax.set_ylabel("keyframe F1 (exact)")
+            ax.scatter(*zip(*theirs), marker="|", s=200, color="black", linewidths=2, label="paper", zorder=3)
+        ax.set_yticks(y, [methods[i] for i in mine], fontsize=8)
+        ax.invert_yaxis()  # the table's first row on top
+        ax.set_xlim(0, 1)
+        ax.set_xlabel("keyframe F1 (exact)")
         ax.set_title(dataset)
-        ax.legend(loc="upper left", fontsize=8)
+        ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     return save_figure(fig, path, dpi=120)
 

@@ -116,6 +116,36 @@ def test_the_papers_methods_come_first_and_our_additions_are_marked():
     assert [row_source(m) for m in ordered] == ["paper"] * 3 + ["ours"] * 4
 
 
+def test_a_row_of_the_papers_keyin_names_the_frame_model_and_sizes_it_changed(tmp_path):
+    # Only a row named plain keyin_paper (or keyin_paper_stated_*) says it ran the paper's stated choices (issue 62).
+    cpu_ours = dict(backbone="ours", scale="cpu")
+    write_job(tmp_path, "keyin_paper_seed0", "keyin_paper", 0, 0.2, **cpu_ours)
+    write_job(tmp_path, "delta_st_seed0", "keyin_paper_delta_st", 0, 0.3, **cpu_ours)
+    write_job(tmp_path, "stated_seed0", "keyin_paper_stated_10k_5k", 0, 0.4, backbone="paper", scale="paper")
+    write_job(tmp_path, "paper_cpu_seed0", "keyin_paper", 1, 0.5, backbone="paper", scale="cpu")
+    write_job(tmp_path, "keyin_plus_seed0", "keyin_plus", 0, 0.9, **cpu_ours)
+    rows = {row.method: row for row in summarise(collect_metrics(tmp_path))}
+    assert sorted(rows) == [
+        "keyin_paper · backbone=ours scale=cpu", "keyin_paper · scale=cpu", "keyin_paper_delta_st · backbone=ours scale=cpu",
+        "keyin_paper_stated_10k_5k", "keyin_plus",
+    ]
+    assert {method: row_source(method) for method in rows} == {
+        "keyin_paper · backbone=ours scale=cpu": "changed", "keyin_paper · scale=cpu": "changed",
+        "keyin_paper_delta_st · backbone=ours scale=cpu": "changed", "keyin_paper_stated_10k_5k": "paper", "keyin_plus": "ours",
+    }
+    assert {row.paper_f1 for row in rows.values()} == {0.84}  # the paper's KEYIN figure beside each
+    assert "| brownian | keyin_paper · backbone=ours scale=cpu | changed | 0.150 ± 0.000 |" in markdown_table(list(rows.values()))
+
+
+def test_a_renamed_row_draws_the_predictions_its_job_saved_under_its_own_name(tmp_path):
+    write_job(tmp_path, "keyin_paper_seed0", "keyin_paper", 0, 0.2, backbone="ours", scale="cpu")
+    saved = {"predicted": {"keyin_paper": [[3, 7]]}, "truth": [[3, 8]]}
+    (tmp_path / "keyin_paper_seed0" / "predictions.json").write_text(json.dumps(saved))
+    job, predicted, truth = report.example_predictions(collect_metrics(tmp_path), "brownian")
+    assert job == tmp_path / "keyin_paper_seed0" and truth == [[3, 8]]
+    assert predicted == {"keyin_paper · backbone=ours scale=cpu": [[3, 7]]}
+
+
 def test_each_row_says_its_jobs_mean_wall_time_and_a_variant_none(tmp_path):
     for seed, minutes in enumerate([10, 20]):
         write_job(tmp_path, f"surprise_seed{seed}", "surprise", seed, 0.4, train_seconds=60 * minutes, score_seconds=90,
