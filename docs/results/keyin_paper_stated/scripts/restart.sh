@@ -1,7 +1,8 @@
 #!/bin/sh
 # Restart the stated configuration's background jobs at the start of a session (issue 62): for each line of jobs.txt, a
 # frozen checkout of the commit the job started with, a venv that borrows the main checkout's packages, the job's carried
-# checkpoint put back (carry.py restore, when the machine was replaced), then stage1.sh resumed in the background.
+# checkpoint put back (carry.py restore, when the machine was replaced), then this checkout's scripts/<kind>.sh resumed in
+# the background (a finished job: its checkpoint put back only).
 #   sh docs/results/keyin_paper_stated/scripts/restart.sh [<jobs dir>]     (from the main checkout, .venv installed)
 set -eu
 main=$(git rev-parse --show-toplevel)
@@ -9,9 +10,11 @@ jobs=${1:-/work/jobs}
 scripts="$main/docs/results/keyin_paper_stated/scripts"
 mkdir -p "$jobs"
 "$main/.venv/bin/keyin-generate" dataset=brownian 'splits={val: 1000, test: 1000}' data_dir="$main/data" > /dev/null  # skips finished shards
-grep -v '^#' "$scripts/jobs.txt" | while read -r frozen commit seed job overrides; do
-  job=${job:-stated_seed$seed}
+grep -v '^#' "$scripts/jobs.txt" | while read -r kind frozen commit job seed more; do
+  stage=interpolator; [ "$kind" = stage2 ] && stage=keyframes
   if pgrep -f "hydra.run.dir=$jobs/$job " > /dev/null; then echo "$job is running already"; continue; fi
+  "$main/.venv/bin/python" "$scripts/carry.py" restore "$jobs" "$job" --stage "$stage"
+  if [ "$kind" = finished ]; then echo "$job is finished: its checkpoint is in place"; continue; fi
   [ -d "$frozen" ] || git -C "$main" worktree add --detach "$frozen" "$commit"
   if [ ! -x "$frozen/.venv/bin/keyin-train" ]; then
     python3 -m venv "$frozen/.venv"
@@ -20,9 +23,12 @@ grep -v '^#' "$scripts/jobs.txt" | while read -r frozen commit seed job override
     "$frozen/.venv/bin/pip" install -q --no-deps -e "$frozen"
   fi
   [ -e "$frozen/data" ] || ln -s "$main/data" "$frozen/data"
-  "$main/.venv/bin/python" "$scripts/carry.py" restore "$jobs" "$job"
+  case $kind in
+    stage1) set -- "$seed" "$jobs" "$main/data" "$job" ;;
+    stage2) set -- "$seed" "$more" "$jobs" "$main/data"; more= ;;
+    *) echo "jobs.txt: unknown kind $kind for $job (stage1, stage2 or finished)" >&2; exit 1 ;;
+  esac
   # shellcheck disable=SC2086  # the overrides are words
-  (cd "$frozen" && PATH="$frozen/.venv/bin:$PATH" nohup sh docs/results/keyin_paper_stated/scripts/stage1.sh "$seed" "$jobs" \
-    "$main/data" "$job" $overrides >> "$jobs/${job}_stage1.log" 2>&1 &)
-  echo "$job resumed in the background in $frozen; log: $jobs/${job}_stage1.log"
+  (cd "$frozen" && PATH="$frozen/.venv/bin:$PATH" nohup sh "$scripts/$kind.sh" "$@" $more >> "$jobs/${job}_$kind.log" 2>&1 &)
+  echo "$job resumed in the background in $frozen; log: $jobs/${job}_$kind.log"
 done
