@@ -12,6 +12,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from readout_chain import joint_offset_keyframes, offset_log_probs  # noqa: E402
 from warm_start_arms import placement_loss, placement_over  # noqa: E402
 from stage1_latent_use import latent_use  # noqa: E402
+from supervised_offsets import PARTS, gradient_norms  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -93,3 +94,19 @@ def test_latent_use_leaves_batchnorm_as_it_was_and_a_deterministic_interpolator_
         assert row[f"{mode}_posterior"] == row[f"{mode}_prior"] == row[f"{mode}_mean"]
         assert row[f"{mode}_kl"] == 0
     assert row["eval_posterior"] != row["train_posterior"]  # BatchNorm: running against batch statistics
+
+
+def test_gradient_norms_sum_each_parts_squared_gradients_and_leave_other_parameters_out():
+    predictor = torch.nn.ModuleDict({
+        "cond_lstm": torch.nn.Linear(2, 2), "inference_lstm": torch.nn.Linear(2, 1), "inference_key_head": torch.nn.Linear(2, 1),
+        "key_lstm": torch.nn.Linear(2, 1), "offset_head": torch.nn.Linear(2, 3), "unrelated": torch.nn.Linear(2, 2),
+    })
+    for parameter in predictor.parameters():
+        parameter.grad = torch.full_like(parameter, 2.0)
+    predictor["key_lstm"].weight.grad = None  # a part with a parameter no gradient reached
+    norms = gradient_norms(predictor)
+    assert set(norms) == set(PARTS)
+    assert math.isclose(norms["LSTM_cond"], 2.0 * math.sqrt(4 + 2))  # weight (2, 2) and bias (2,)
+    assert math.isclose(norms["LSTM_inf + attention"], 2.0 * math.sqrt(2 * (2 + 1)))  # two heads of 2 + 1 numbers
+    assert math.isclose(norms["LSTM_key + K̂ head"], 2.0)  # its bias alone
+    assert math.isclose(norms["offset head"], 2.0 * math.sqrt(6 + 3))
