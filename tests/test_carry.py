@@ -54,6 +54,7 @@ def test_a_stage_2_job_is_carried_under_its_own_name_and_restored_to_its_keyfram
     monkeypatch.setattr(carry, "ROOT", tmp_path)
     monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
     monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
+    monkeypatch.setattr(carry, "RECORDS", tmp_path / "docs" / "jobs")
     carry.MANIFEST.parent.mkdir(parents=True)
     carry.MANIFEST.write_text('{"models": []}')
     jobs = tmp_path / "jobs"
@@ -66,6 +67,46 @@ def test_a_stage_2_job_is_carried_under_its_own_name_and_restored_to_its_keyfram
     assert target.name == "stated_stage2_seed1_stage2_last.ckpt"
     entry = json.loads(carry.MANIFEST.read_text())["models"][0]
     assert (entry["stage"], entry["model"], entry["path"]) == ("keyframes", "keyin_paper_stated_10k_5k", "models/in_progress/stated_stage2_seed1_stage2_last.ckpt")
+    recorded = json.loads((carry.RECORDS / "stated_stage2_seed1" / "checkpoints.json").read_text())
+    assert recorded["checkpoints/keyframes/last.ckpt"]["global_step"] == 500 and recorded["carried"]["path"] == entry["path"]
     source.unlink()
     carry.restore(jobs, "stated_stage2_seed1", "keyframes")
     assert torch.load(source, weights_only=False)["global_step"] == 500
+
+
+def test_a_resumed_runs_rows_replace_the_steps_it_repeats_and_every_earlier_step_is_kept():
+    def rows(*steps):
+        return [{"step": str(step), "train/loss": f"{step}.0"} for step in steps]
+
+    committed, lost_after_checkpoint, resumed = rows(24, 49, 499, 524), rows(549), rows(524, 549, 574)
+    merged = carry.merged_rows([committed, [], resumed])
+    assert [row["step"] for row in merged] == ["24", "49", "499", "524", "549", "574"]
+    assert carry.merged_rows([committed + lost_after_checkpoint, resumed]) == merged  # the lost run's 549 replaced
+
+
+def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, monkeypatch):
+    monkeypatch.setattr(carry, "ROOT", tmp_path)
+    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
+    monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
+    monkeypatch.setattr(carry, "RECORDS", tmp_path / "docs" / "jobs")
+    carry.MANIFEST.parent.mkdir(parents=True)
+    carry.MANIFEST.write_text('{"models": []}')
+    jobs, job = tmp_path / "jobs", "stated_seed0"
+    (jobs / job / ".hydra").mkdir(parents=True)
+    (jobs / job / ".hydra" / "config.yaml").write_text("model:\n  name: keyin_paper_stated_20k\n")
+    folder = carry.RECORDS / job
+    folder.mkdir(parents=True)
+    (folder / "stage1_metrics.csv").write_text("epoch,step,train/loss\n0,24,9.0\n0,49,8.0\n")
+    (folder / "checkpoints.json").write_text('{"note": "in progress"}')
+    for version, text in ((0, "epoch,step,train/loss,val/bce\n0,49,7.5,\n0,49,,3.0\n"), (1, "epoch,step,train/loss\n0,74,7.0\n")):
+        (jobs / job / "csv" / f"version_{version}").mkdir(parents=True)
+        (jobs / job / "csv" / f"version_{version}" / "metrics.csv").write_text(text)
+    source = carry.job_checkpoint(jobs, job)
+    source.parent.mkdir(parents=True)
+    torch.save({"state_dict": {"w": torch.ones(2)}, "optimizer_states": [], "global_step": 50}, source)
+    carry.save(jobs, job)
+    assert (folder / "stage1_metrics.csv").read_text() == (
+        "epoch,step,train/loss,val/bce\n0,24,9.0,\n0,49,7.5,\n0,49,,3.0\n0,74,7.0,\n")
+    cards = json.loads((folder / "checkpoints.json").read_text())
+    assert cards["note"] == "in progress" and cards["checkpoints/interpolator/last.ckpt"]["global_step"] == 50
+    assert cards["carried"]["sha256"] == carry.sha256_of(carry.carried(job))

@@ -3,7 +3,10 @@
 A session's machine may be replaced before the next session, and git-ignored run folders go with it. ``save``
 writes the job's ``last.ckpt`` into ``models/in_progress/`` (committed): the weights as they are, Adam's moments in
 bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' float32 on resume), and lists it in
-``models/manifest.json`` and the folder's ``models.json``. ``restore`` puts it back where the job resumes from.
+``models/manifest.json`` and the folder's ``models.json``; it also records the job in ``docs/results/keyin_paper_stated/jobs/<job>/``
+(committed): its metrics so far (``stage1_metrics.csv`` or ``stage2_metrics.csv``, the rows of every run, a resumed run's
+rows replacing those it repeats) and ``checkpoints.json`` (the live and the carried checkpoint's SHA-256, step and size; its
+``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from.
 
     python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>      # e.g. /work/jobs stated_seed0
     python docs/results/keyin_paper_stated/scripts/carry.py restore <jobs dir> <job>
@@ -13,7 +16,10 @@ bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' 
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import json
+from datetime import date
 from pathlib import Path
 
 import torch
@@ -29,6 +35,7 @@ STAGES = {  # stage → (the name it carries in models/in_progress/, the command
     "keyframes": ("stage2", "sh docs/results/keyin_paper_stated/scripts/stage2.sh <seed> <steps> <jobs dir> <data dir>"),
 }
 EXPORT = "python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job> --stage <stage>"
+RECORDS = ROOT / "docs" / "results" / "keyin_paper_stated" / "jobs"
 
 
 def job_checkpoint(jobs: Path, job: str, stage: str = "interpolator") -> Path:
@@ -78,7 +85,43 @@ def save(jobs: Path, job: str, stage: str = "interpolator") -> Path:
     manifest["models"] = [e for e in manifest["models"] if e["path"] != path] + [entry]
     atomic_write_text(MANIFEST, json.dumps(manifest, indent=1) + "\n")
     print(f"{source} (step {checkpoint['global_step']}) → {path}, {card['bytes']} bytes")
+    record(jobs, job, stage, {"sha256": card["source_sha256"], "global_step": checkpoint["global_step"],
+                              "bytes": source.stat().st_size}, {"path": path, "sha256": card["sha256"], "bytes": card["bytes"]})
     return target
+
+
+def merged_rows(runs: list[list[dict[str, str]]]) -> list[dict[str, str]]:
+    """The metrics rows of a job's runs in the order they ran, each run's rows replacing the earlier rows at or after its
+    first step (a resumed run repeats the steps after its checkpoint)."""
+    rows: list[dict[str, str]] = []
+    for run in (run for run in runs if run):
+        first = min(int(row["step"]) for row in run)
+        rows = [row for row in rows if int(row["step"]) < first] + run
+    return rows
+
+
+def read_rows(path: Path) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(path.read_text()))) if path.is_file() else []
+
+
+def record(jobs: Path, job: str, stage: str, live: dict, carried_file: dict) -> None:
+    """The job's metrics and checkpoint hashes into its committed folder (see the module's docstring)."""
+    folder = RECORDS / job
+    folder.mkdir(parents=True, exist_ok=True)
+    metrics = folder / f"{STAGES[stage][0]}_metrics.csv"
+    versions = sorted((jobs / job / "csv").glob("version_*/metrics.csv"), key=lambda p: int(p.parent.name.split("_")[1]))
+    rows = merged_rows([read_rows(metrics)] + [read_rows(path) for path in versions])
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=columns, restval="", lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_text(metrics, text.getvalue())
+    cards_path = folder / "checkpoints.json"
+    cards = json.loads(cards_path.read_text()) if cards_path.is_file() else {}
+    cards |= {f"checkpoints/{stage}/last.ckpt": live, "carried": carried_file, "date": str(date.today())}
+    atomic_write_text(cards_path, json.dumps(cards, indent=1) + "\n")
+    print(f"{metrics.relative_to(ROOT)}: {len(rows)} rows; {cards_path.relative_to(ROOT)} at step {live['global_step']}")
 
 
 def restore(jobs: Path, job: str, stage: str = "interpolator") -> None:
