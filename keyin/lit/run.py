@@ -16,7 +16,7 @@ from keyin.errors import KeyinError
 from keyin.io import remove_stale_temporaries
 from keyin.lit.checkpoints import BEST, AtomicCheckpointIO, RunConfigInCheckpoint, check_same_model, load_checkpoint
 from keyin.lit.pictures import ValidationPictures
-from keyin.lit.progress import StepProgressBar
+from keyin.lit.progress import step_progress
 from keyin.lit.ranks import RankSeeds
 
 
@@ -125,7 +125,7 @@ def fit_stage(
     last = folder / "last.ckpt"
     trainer_kwargs = dict(trainer_kwargs)
     trainer_kwargs["log_every_n_steps"] = logging_interval(trainer_kwargs.get("log_every_n_steps", 50), max_steps)
-    progress = [StepProgressBar()] if trainer_kwargs.get("enable_progress_bar", True) else []
+    progress = [step_progress()] if trainer_kwargs.get("enable_progress_bar", True) else []
     trainer = L.Trainer(
         **trainer_kwargs,
         max_steps=max_steps,
