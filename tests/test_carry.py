@@ -5,12 +5,25 @@ import importlib.util
 import json
 from pathlib import Path
 
+import pytest
 import torch
 
 SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "keyin_paper_stated" / "scripts" / "carry.py"
 spec = importlib.util.spec_from_file_location("carry", SCRIPT)
 carry = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(carry)
+
+
+@pytest.fixture
+def repo(tmp_path, monkeypatch):
+    """carry.py writing into a checkout under tmp_path, its manifest empty."""
+    monkeypatch.setattr(carry, "ROOT", tmp_path)
+    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
+    monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
+    monkeypatch.setattr(carry, "RECORDS", tmp_path / "docs" / "jobs")
+    carry.MANIFEST.parent.mkdir(parents=True)
+    carry.MANIFEST.write_text('{"models": []}')
+    return tmp_path
 
 
 def test_a_slimmed_checkpoint_resumes_adam_with_its_moments_to_bfloat16_precision(tmp_path):
@@ -50,13 +63,7 @@ def test_restore_puts_the_carried_file_where_the_job_resumes_and_never_over_a_ne
     assert target.read_bytes() == b"newer"
 
 
-def test_a_stage_2_job_is_carried_under_its_own_name_and_restored_to_its_keyframes_checkpoint(tmp_path, monkeypatch):
-    monkeypatch.setattr(carry, "ROOT", tmp_path)
-    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
-    monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
-    monkeypatch.setattr(carry, "RECORDS", tmp_path / "docs" / "jobs")
-    carry.MANIFEST.parent.mkdir(parents=True)
-    carry.MANIFEST.write_text('{"models": []}')
+def test_a_stage_2_job_is_carried_under_its_own_name_and_restored_to_its_keyframes_checkpoint(tmp_path, repo):
     jobs = tmp_path / "jobs"
     (jobs / "stated_stage2_seed1" / ".hydra").mkdir(parents=True)
     (jobs / "stated_stage2_seed1" / ".hydra" / "config.yaml").write_text("model:\n  name: keyin_paper_stated_10k_5k\n")
@@ -84,13 +91,7 @@ def test_a_resumed_runs_rows_replace_the_steps_it_repeats_and_every_earlier_step
     assert carry.merged_rows([committed + lost_after_checkpoint, resumed]) == merged  # the lost run's 549 replaced
 
 
-def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, monkeypatch):
-    monkeypatch.setattr(carry, "ROOT", tmp_path)
-    monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
-    monkeypatch.setattr(carry, "MANIFEST", tmp_path / "models" / "manifest.json")
-    monkeypatch.setattr(carry, "RECORDS", tmp_path / "docs" / "jobs")
-    carry.MANIFEST.parent.mkdir(parents=True)
-    carry.MANIFEST.write_text('{"models": []}')
+def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, repo):
     jobs, job = tmp_path / "jobs", "stated_seed0"
     (jobs / job / ".hydra").mkdir(parents=True)
     (jobs / job / ".hydra" / "config.yaml").write_text("model:\n  name: keyin_paper_stated_20k\n")
