@@ -21,8 +21,9 @@ from tests.lit.tiny_models import stage2
 
 ROOT = Path(__file__).parents[2]
 SHIPPED = [FOLDER / card["file"] for card in registry().values()]
+# the committed stage 2s of before the typed configs (models/in_progress/ carries today's jobs, typed: tests/test_carry.py)
 COMMITTED = [ROOT / entry["path"] for entry in json.loads((ROOT / "models" / "manifest.json").read_text())["models"]
-             if entry["stage"] == "keyframes"]
+             if entry["stage"] == "keyframes" and not entry["path"].startswith("models/in_progress/")]
 
 
 def lightning_file(path: Path, folder: Path) -> Path:
