@@ -32,11 +32,10 @@ from torch.utils.data import DataLoader
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # common.py stays with the benchmarks
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import clip_arguments, cpu_model, publish, split_batch  # noqa: E402
-from warm_start_arms import placement_loss, scratch_module  # noqa: E402
+from warm_start_arms import offset_scores, placement_loss, scratch_module  # noqa: E402
 
 from keyin.checkpoints import load_checkpoint  # noqa: E402
 from keyin.data.datamodule import split_clips  # noqa: E402
-from keyin.eval.f1 import keyframe_lists, keyframe_scores  # noqa: E402
 from keyin.lit.registry import run_config  # noqa: E402
 
 ARMS = {  # arm → keyin-train overrides added to --overrides
@@ -65,14 +64,12 @@ def gradient_norms(predictor: torch.nn.Module) -> dict[str, float]:
 
 @torch.no_grad()
 def validate(module, batch: dict) -> dict[str, float]:
-    """Argmax-offset F1 (keyin-eval's ``offsets``), distinct patterns and the labels' cross-entropy (z at its mean)."""
+    """Argmax-offset F1 (keyin-eval's ``offsets``), keyframes per clip, distinct patterns and the labels' cross-entropy
+    (z at its mean)."""
     module.eval()
-    clips, lengths = batch["frames"], batch["future_length"]
-    found = module.reader().discover(clips, lengths, "offsets")
-    scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
-    out = module.model(clips, lengths, sample=False)
-    return {"f1": scores["f1"], "patterns": float(len({tuple(row) for row in found})),
-            "cross_entropy": placement_loss(out["offset_probs"], batch["keyframes"], lengths).item()}
+    out = module.model(batch["frames"], batch["future_length"], sample=False)
+    return {**offset_scores(module, batch),
+            "cross_entropy": placement_loss(out["offset_probs"], batch["keyframes"], batch["future_length"]).item()}
 
 
 def run_arm(ckpt: str, overrides: list[str], train, val_batch: dict, steps: int, every: int, lr: float,

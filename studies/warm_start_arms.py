@@ -182,18 +182,25 @@ def forward(module, clips: torch.Tensor, lengths: torch.Tensor, arm: Arm) -> dic
 
 
 @torch.no_grad()
+def offset_scores(module, batch: dict) -> dict[str, float]:
+    """The argmax offsets (keyin-eval's ``offsets``) on the batch: F1, interior keyframes per clip, distinct patterns."""
+    clips = batch["frames"]
+    found = module.reader().discover(clips, batch["future_length"], "offsets")
+    scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
+    return {"f1": scores["f1"], "keys": scores["n_predicted"], "patterns": float(len({tuple(row) for row in found}))}
+
+
+@torch.no_grad()
 def validate(module, batch: dict, arm: Arm) -> dict[str, float]:
     """Argmax-offset F1 (keyin-eval's ``offsets``) and the loss terms on the validation batch."""
     clips, lengths = batch["frames"], batch["future_length"]
-    found = module.reader().discover(clips, lengths, "offsets")
-    scores = keyframe_scores(found, keyframe_lists(batch["keyframes"]), clips.shape[1] - module.model.n_cond)
+    offsets = offset_scores(module, batch)
     with evaluating(module):
         torch.manual_seed(0)
         out = forward(module, clips, lengths, arm)
         terms = arm_loss(module, clips, lengths, out, arm.expected)
     return {
-        "f1": scores["f1"], "keys": scores["n_predicted"], "patterns": float(len({tuple(row) for row in found})),
-        "loss": terms["loss"].item(), "inter": terms["inter"].item(), "key_emb": terms["key_emb"].item(),
+        **offsets, "loss": terms["loss"].item(), "inter": terms["inter"].item(), "key_emb": terms["key_emb"].item(),
         "kl": terms["kl"].item(), "entropy": offset_entropy(out["offset_probs"]).mean().item(),
         "inter_expected": terms["inter_expected"].item(),
     }

@@ -96,13 +96,16 @@ def collect_metrics(root: Roots) -> list[dict[str, Any]]:
             raise ValueError(f"{folder / 'metrics.json'} lacks {', '.join(missing)}: not a keyin metrics.json")
         common = {key: metrics.get(key) for key in ("dataset", "seed", "scale")}
         common.update(seed=metrics.get("seed", 0), path=str(folder))
-        def rename(name: str, metrics: dict[str, Any] = metrics) -> str:
-            return named_as_run(name if "keyin_version" in metrics else current_name(name), metrics)
-
-        records.append({**metrics, **common, "method": rename(metrics["method"]), "saved_as": metrics["method"]})
+        records.append({**metrics, **common, "method": row_name(metrics["method"], metrics), "saved_as": metrics["method"]})
         for name, scores in metrics.get("variants", {}).items():
-            records.append({**scores, **common, "method": rename(name), "saved_as": name})
+            records.append({**scores, **common, "method": row_name(name, metrics), "saved_as": name})
     return records
+
+
+def row_name(name: str, metrics: dict[str, Any]) -> str:
+    """The row of a method or variant ``name`` of the job whose ``metrics`` these are: a keyin 0.1 name (no
+    ``keyin_version``) in today's names (:func:`current_name`), then :func:`named_as_run`."""
+    return named_as_run(name if "keyin_version" in metrics else current_name(name), metrics)
 
 
 def named_as_run(method: str, metrics: dict[str, Any]) -> str:

@@ -71,4 +71,4 @@ def duration(seconds: float) -> str:
 def step_progress(stream: TextIO | None = None) -> Callback:
     """:class:`StepProgressBar` where ``stream`` (default: stdout) is a terminal, else :class:`StepLogLines`."""
     stream = stream or sys.stdout
-    return StepProgressBar() if stream.isatty() else StepLogLines()
+    return StepProgressBar() if stream.isatty() else StepLogLines(stream=stream)

@@ -34,7 +34,9 @@ class Terminal(io.StringIO):
 
 def test_a_terminal_gets_the_bar_and_a_log_file_the_lines():
     assert isinstance(step_progress(Terminal()), StepProgressBar)
-    assert isinstance(step_progress(io.StringIO()), StepLogLines)
+    log = io.StringIO()
+    lines = step_progress(log)
+    assert isinstance(lines, StepLogLines) and lines.stream is log  # its lines go where it looked
 
 
 def test_the_lines_name_the_stage_its_step_of_max_steps_the_pace_and_the_metrics_with_no_carriage_return():
