@@ -2,7 +2,7 @@
 # Restart the stated configuration's background jobs at the start of a session (issue 62): for each line of jobs.txt, a
 # frozen checkout of the commit the job started with, a venv that borrows the main checkout's packages, the job's carried
 # checkpoint put back (carry.py restore, when the machine was replaced), then this checkout's scripts/<kind>.sh resumed in
-# the background (a finished job: its checkpoint put back only).
+# the background (a finished or paused job: its checkpoint put back only).
 #   sh docs/results/keyin_paper_stated/scripts/restart.sh [<jobs dir>]     (from the main checkout, .venv installed)
 set -eu
 main=$(git rev-parse --show-toplevel)
@@ -14,7 +14,10 @@ grep -v '^#' "$scripts/jobs.txt" | while read -r kind frozen commit job seed mor
   stage=interpolator; [ "$kind" = stage2 ] && stage=keyframes
   if pgrep -f "hydra.run.dir=$jobs/$job " > /dev/null; then echo "$job is running already"; continue; fi
   "$main/.venv/bin/python" "$scripts/carry.py" restore "$jobs" "$job" --stage "$stage"
-  if [ "$kind" = finished ]; then echo "$job is finished: its checkpoint is in place"; continue; fi
+  case $kind in
+    finished) echo "$job is finished: its checkpoint is in place"; continue ;;
+    paused) echo "$job is paused: its checkpoint is in place (kind stage1/stage2 in jobs.txt resumes it)"; continue ;;
+  esac
   [ -d "$frozen" ] || git -C "$main" worktree add --detach "$frozen" "$commit"
   if [ ! -x "$frozen/.venv/bin/keyin-train" ]; then
     python3 -m venv "$frozen/.venv"
@@ -26,7 +29,7 @@ grep -v '^#' "$scripts/jobs.txt" | while read -r kind frozen commit job seed mor
   case $kind in
     stage1) set -- "$seed" "$jobs" "$main/data" "$job" ;;
     stage2) set -- "$seed" "$more" "$jobs" "$main/data"; more= ;;
-    *) echo "jobs.txt: unknown kind $kind for $job (stage1, stage2 or finished)" >&2; exit 1 ;;
+    *) echo "jobs.txt: unknown kind $kind for $job (stage1, stage2, finished or paused)" >&2; exit 1 ;;
   esac
   # shellcheck disable=SC2086  # the overrides are words
   (cd "$frozen" && PATH="$frozen/.venv/bin:$PATH" nohup sh "$scripts/$kind.sh" "$@" $more >> "$jobs/${job}_$kind.log" 2>&1 &)
