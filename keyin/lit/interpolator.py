@@ -21,7 +21,10 @@ import torch.nn.functional as F
 from keyin.data.segments import partition_segments, valid_frames
 from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.interpolation import autoencoding_bce, interpolation_bce, offset_contrast
+from keyin.losses.interpolation import (
+    autoencoding_bce, autoencoding_pick, decode_in_one_batch, interpolated_outputs, interpolation_bce, offset_contrast,
+    segment_bce,
+)
 from keyin.models import InterpolatorPosterior
 from keyin.models.distributions import gaussian_kl
 from keyin.models.config import FrameModelConfig, InterpolatorConfig, picked
@@ -132,6 +135,20 @@ class InterpolatorModule(L.LightningModule):
         """(B, L, C, H, W) weights of the image likelihood, None for the plain BCE (keyin/losses/image.py)."""
         return model_pixel_weights(clips, self.hparams)
 
+    def autoencoded_frames(
+        self, clips: torch.Tensor, embeddings: torch.Tensor, weights: torch.Tensor | None, lengths: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None, int]:
+        """The frames the auto-encoding term decodes: ``ae_frames`` drawn at random among the clips' valid ones (all
+        for 0), with their embeddings (F', E) and pixel weights, and how many valid frames they were drawn from."""
+        in_clip = valid_frames(lengths.to(clips.device), clips.shape[1])  # (B, L)
+        frames, frame_emb = clips[in_clip], embeddings[in_clip]
+        frame_weights = None if weights is None else weights[in_clip]
+        pick = autoencoding_pick(len(frames), self.hparams.ae_frames, self.segment_rng)
+        if pick is None:
+            return frames, frame_emb, frame_weights, len(frames)
+        pick = pick.to(clips.device)
+        return frames[pick], frame_emb[pick], None if frame_weights is None else frame_weights[pick], len(frames)
+
     def training_step(self, batch: dict[str, torch.Tensor], batch_idx: int) -> torch.Tensor:
         clips = batch["frames"]  # (B, L, C, H, W)
         hp, n_clips = self.hparams, clips.shape[0]
@@ -140,17 +157,23 @@ class InterpolatorModule(L.LightningModule):
             embeddings = self.encoder(clips)  # (B, L, E)
         weights = self.pixel_weights(clips)
         segments = partition_segments(lengths, hp.offset_min, hp.offset_max, self.segment_rng)
-        bce, _, kl = self.segment_bce(clips, weights, embeddings, segments, "posterior")
+        predicted, valid, positions, posterior = interpolated_outputs(
+            self.interpolator, self.posterior, embeddings, segments, "posterior"
+        )
+        to_decode = [predicted[valid]]
+        if not hp.frozen_frames:  # a frozen frame model has learnt to auto-encode already
+            frames, frame_emb, frame_weights, n_frames = self.autoencoded_frames(clips, embeddings, weights, lengths)
+            to_decode.append(frame_emb)
+        # one decoder batch for the interpolated and the auto-encoded frames (BatchNorm: docs/decisions.md)
+        logits, *frame_logits = decode_in_one_batch(self.decoder, *to_decode)
+        bce = segment_bce(logits, valid, clips, weights, segments[0].to(clips.device), positions)
+        kl = gaussian_kl(*posterior) if posterior is not None else torch.zeros_like(bce)
         loss = bce.sum() / n_clips + hp.kl_weight * (kl.sum() / n_clips)
         logged = {"train/bce_per_frame": bce.sum() / (segments[2].sum() + 1e-9), "train/kl_per_segment": kl.mean()}
-        if not hp.frozen_frames:  # a frozen frame model has learnt to auto-encode already
-            valid = valid_frames(lengths.to(clips.device), clips.shape[1])
-            autoencoding = autoencoding_bce(
-                self.decoder, clips[valid], embeddings[valid], None if weights is None else weights[valid],
-                hp.ae_frames, self.segment_rng,
-            )
+        if frame_logits:
+            autoencoding = autoencoding_bce(frame_logits[0], frames, frame_weights, n_frames)
             loss = loss + hp.ae_weight * (autoencoding / n_clips)
-            logged["train/ae_per_frame"] = autoencoding / valid.sum()
+            logged["train/ae_per_frame"] = autoencoding / n_frames
         self.log_dict({"train/loss": loss, **logged}, prog_bar=True)
         return loss
 

@@ -23,13 +23,13 @@ SegmentScorer = Callable[[Tensor, Tensor, Tensor], tuple[Tensor, Tensor]]
 
 
 def segment_bce(
-    decoder: Decoder, predicted: Tensor, valid: Tensor, frames: Tensor, weights: Tensor | None, clip: Tensor,
-    positions: Tensor,
+    logits: Tensor, valid: Tensor, frames: Tensor, weights: Tensor | None, clip: Tensor, positions: Tensor
 ) -> Tensor:
     """Summed (pixel-weighted) BCE of each segment's interpolated frames against the true ones.
 
     Args:
-        predicted: (R, S, E) interpolated embeddings; valid: (R, S) which of them exist.
+        logits: (V, C, H, W) or (V, D) the decoded interpolated frames that exist, ``decoder(predicted[valid])``.
+        valid: (R, S) which of each segment's S outputs exist.
         frames: (B, L, ...) targets in [0, 1], images (C, H, W) or flattened (D); weights: like
             ``frames`` or None (plain BCE).
         clip: (R,) each segment's clip; positions: (R, S) where each output's frame lies on ``frames``' axis L.
@@ -40,10 +40,23 @@ def segment_bce(
     positions = positions[valid]
     targets = frames[rows, positions]  # (V, ...)
     weights = None if weights is None else weights[rows, positions]
-    logits = decoder(predicted[valid]).float().reshape(targets.shape)
+    logits = logits.float().reshape(targets.shape)
     bce = F.binary_cross_entropy_with_logits(logits, targets.to(logits), None if weights is None else weights.to(logits),
                                              reduction="none")
     return logits.new_zeros(valid.shape[0]).index_put_((valid.nonzero()[:, 0],), bce.flatten(1).sum(1), accumulate=True)
+
+
+def decode_in_one_batch(decoder: Decoder, *embeddings: Tensor) -> tuple[Tensor, ...]:
+    """Decode several sets of embeddings, each (R_i, E), in one call and split the logits back.
+
+    A BatchNorm decoder in train mode normalises each call by that call's statistics; decoding the interpolated and
+    the auto-encoded frames apart teaches it two normalisations, and its running statistics (eval mode) hold neither
+    (docs/decisions.md, "Stage 1 decodes in one batch"). One call trains the normalisation eval mode reproduces.
+
+    Returns:
+        the logits of each set, (R_i, ...).
+    """
+    return decoder(torch.cat(embeddings)).split([len(part) for part in embeddings])
 
 
 def interpolation_bce(
@@ -64,35 +77,47 @@ def interpolation_bce(
         per-segment BCE (R,), frames per segment (R,), and the posterior's (mu, log_sigma), each
         (R, Zi), where z was drawn from it (else None).
     """
-    predicted, valid, stats = interpolate_segments(interpolator, posterior, embeddings, *segments, latent)
-    clip, start, offset = (index.to(embeddings.device) for index in segments)
-    positions, _ = segment_frames(start, offset, interpolator.max_offset)
-    bce = segment_bce(decoder, predicted, valid, frames, weights, clip, positions - first_frame)
+    predicted, valid, positions, stats = interpolated_outputs(interpolator, posterior, embeddings, segments, latent)
+    bce = segment_bce(decoder(predicted[valid]), valid, frames, weights, segments[0].to(valid.device), positions - first_frame)
     return bce, valid.sum(1), stats
 
 
-def autoencoding_bce(
-    decoder: Decoder, frames: Tensor, embeddings: Tensor, weights: Tensor | None,
-    subset: int = 0, generator: torch.Generator | None = None,
-) -> Tensor:
-    """Summed (pixel-weighted) BCE of decoding the frames' own embeddings.
+def interpolated_outputs(
+    interpolator: Interpolator, posterior: InterpolatorPosterior | None, embeddings: Tensor,
+    segments: tuple[Tensor, Tensor, Tensor], latent: str,
+) -> tuple[Tensor, Tensor, Tensor, tuple[Tensor, Tensor] | None]:
+    """The interpolated embeddings of ``segments`` (clip, start, offset, each (R,)) and where their frames lie.
+
+    Returns:
+        predicted (R, S, E), valid (R, S), positions (R, S) on the clip axis, and the posterior's (mu, log_sigma)
+        where z was drawn from it (else None) (:func:`keyin.models.interpolator.interpolate_segments`).
+    """
+    predicted, valid, stats = interpolate_segments(interpolator, posterior, embeddings, *segments, latent)
+    _, start, offset = (index.to(embeddings.device) for index in segments)
+    positions, _ = segment_frames(start, offset, interpolator.max_offset)
+    return predicted, valid, positions, stats
+
+
+def autoencoding_pick(n_frames: int, subset: int = 0, generator: torch.Generator | None = None) -> Tensor | None:
+    """Which of ``n_frames`` frames the auto-encoding term decodes: a uniform random ``subset`` of them (drawn with
+    ``generator``), or None for all (``subset`` 0 or ≥ ``n_frames``); :func:`autoencoding_bce` rescales to all."""
+    return torch.randperm(n_frames, generator=generator)[:subset] if 0 < subset < n_frames else None
+
+
+def autoencoding_bce(logits: Tensor, frames: Tensor, weights: Tensor | None, n_frames: int | None = None) -> Tensor:
+    """Summed (pixel-weighted) BCE of the frames decoded from their own embeddings.
 
     Args:
-        frames: (F, C, H, W); embeddings: (F, E); weights: like ``frames`` or None.
-        subset: > 0 decodes a uniform random subset of that many frames (drawn with ``generator``)
-            and rescales the sum to all F, an unbiased estimate at a fraction of the decoder's cost.
+        logits: (F', C, H, W) ``decoder(embeddings)``; frames: (F', C, H, W) in [0, 1]; weights: like ``frames`` or None.
+        n_frames: the frames F' was drawn from (:func:`autoencoding_pick`): the sum is rescaled to all of them, an
+            unbiased estimate at a fraction of the decoder's cost. None: F'.
     Returns:
         () the sum over pixels and frames.
     """
-    n_frames = frames.shape[0]
-    if 0 < subset < n_frames:
-        pick = torch.randperm(n_frames, generator=generator)[:subset].to(frames.device)
-        frames, embeddings = frames[pick], embeddings[pick]
-        weights = None if weights is None else weights[pick]
-    logits = decoder(embeddings).float()
+    logits = logits.float()
     bce = F.binary_cross_entropy_with_logits(logits, frames.to(logits), None if weights is None else weights.to(logits),
                                              reduction="sum")
-    return bce * n_frames / frames.shape[0]
+    return bce if n_frames is None else bce * n_frames / frames.shape[0]
 
 
 def offset_contrast(

@@ -123,8 +123,13 @@ class SVG(nn.Module):
         """
         embeddings, context = self.encode(clips)
         predicted, mu, log_sigma = self.core(embeddings, sample=sample)
-        logits = self.decode(predicted, context)
-        return SVGOutput(logits, mu, log_sigma, self.decode(embeddings, context) if reconstruct else None)
+        if not reconstruct:
+            return SVGOutput(self.decode(predicted, context), mu, log_sigma, None)
+        # the predicted and the auto-encoded frames in one decoder batch: a BatchNorm decoder's eval mode then renders
+        # what training normalised (keyin.losses.interpolation.decode_in_one_batch)
+        both = self.decode(torch.cat([predicted, embeddings], dim=1), context)
+        logits, reconstruction = both.split([predicted.shape[1], embeddings.shape[1]], dim=1)
+        return SVGOutput(logits, mu, log_sigma, reconstruction)
 
     def one_step_video(self, clips: Tensor) -> Tensor:
         """(B, L, C, H, W) probabilities: frame 0 of (B, L, C, H, W) clips, then the one-step

@@ -14,7 +14,7 @@ def test_the_reconstruction_bce_weighs_each_frame_against_its_clips_first_as_the
     clip, frame = torch.tensor([0, 2, 2, 1]), torch.tensor([4, 0, 3, 1])
     weights = changed_pixel_weights(clips, 20.0, 0.1)[clip, frame]
     frames = clips[clip, frame]
-    expected = autoencoding_bce(module.network.decoder, frames, module.network.encoder(frames), weights)
+    expected = autoencoding_bce(module.network.decoder(module.network.encoder(frames)), frames, weights)
     bce, logits = module.reconstruction(clips, clip, frame)
     torch.testing.assert_close(bce, expected)
     torch.testing.assert_close(logits, module.network.decoder(module.network.encoder(frames)))

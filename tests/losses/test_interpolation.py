@@ -5,7 +5,7 @@ import torch
 import torch.nn.functional as F
 
 from keyin.data.segments import segment_frames, valid_frames
-from keyin.losses.interpolation import autoencoding_bce, offset_contrast, segment_bce
+from keyin.losses.interpolation import autoencoding_bce, autoencoding_pick, decode_in_one_batch, offset_contrast, segment_bce
 
 torch.manual_seed(0)
 DECODER = torch.nn.Sequential(torch.nn.Linear(4, 2 * 3 * 3), torch.nn.Unflatten(1, (2, 3, 3)))
@@ -17,7 +17,7 @@ def test_segment_bce_sums_each_segments_own_frames():
     clip, start, offset = torch.tensor([0, 1, 1]), torch.tensor([0, 2, 1]), torch.tensor([3, 1, 4])
     predicted = torch.randn(3, 4, 4)
     positions, valid = segment_frames(start, offset, 4)
-    bce = segment_bce(DECODER, predicted, valid, clips, weights, clip, positions)
+    bce = segment_bce(DECODER(predicted[valid]), valid, clips, weights, clip, positions)
     for row in range(3):
         expected = sum(
             F.binary_cross_entropy_with_logits(
@@ -27,18 +27,27 @@ def test_segment_bce_sums_each_segments_own_frames():
             for i in range(int(offset[row]))
         )
         assert bce[row].item() == pytest.approx(expected.item(), rel=1e-5)
-    flat = segment_bce(DECODER, predicted, valid, clips.flatten(2), weights.flatten(2), clip, positions)
+    flat = segment_bce(DECODER(predicted[valid]), valid, clips.flatten(2), weights.flatten(2), clip, positions)
     assert torch.equal(flat, bce)  # flattened frames (B, L, D) score the same
 
 
 def test_autoencoding_bce_of_a_subset_is_rescaled_to_all_frames():
     frames, embeddings = torch.rand(6, 2, 3, 3), torch.randn(6, 4)
-    full = autoencoding_bce(DECODER, frames, embeddings, None)
+    full = autoencoding_bce(DECODER(embeddings), frames, None)
     assert full.item() == pytest.approx(F.binary_cross_entropy_with_logits(DECODER(embeddings), frames, reduction="sum").item())
     # every 3-frame subset, weighted by how often randperm draws it, averages to the full sum
-    estimates = [autoencoding_bce(DECODER, frames, embeddings, None, 3, torch.Generator().manual_seed(s)) for s in range(400)]
+    picks = [autoencoding_pick(6, 3, torch.Generator().manual_seed(s)) for s in range(400)]
+    estimates = [autoencoding_bce(DECODER(embeddings[pick]), frames[pick], None, 6) for pick in picks]
     assert torch.stack(estimates).mean().item() == pytest.approx(full.item(), rel=0.02)
-    assert autoencoding_bce(DECODER, frames, embeddings, None, 6).item() == pytest.approx(full.item())
+    assert autoencoding_pick(6, 6) is None and autoencoding_pick(6, 0) is None  # all frames: nothing to draw
+
+
+def test_decoding_in_one_batch_gives_each_set_its_own_logits():
+    first, second = torch.randn(5, 4), torch.randn(3, 4)
+    logits = decode_in_one_batch(DECODER, first, second)
+    assert [tuple(part.shape) for part in logits] == [(5, 2, 3, 3), (3, 2, 3, 3)]
+    torch.testing.assert_close(logits[0], DECODER(first))
+    torch.testing.assert_close(logits[1], DECODER(second))
 
 
 def test_offset_contrast_splits_segments_at_labelled_keyframes():
