@@ -111,3 +111,28 @@ def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_has
     cards = json.loads((folder / "checkpoints.json").read_text())
     assert cards["note"] == "in progress" and cards["checkpoints/interpolator/last.ckpt"]["global_step"] == 50
     assert cards["carried"]["sha256"] == carry.sha256_of(carry.carried(job))
+
+
+PUBLISH = SCRIPT.with_name("publish.py")
+publish_spec = importlib.util.spec_from_file_location("publish", PUBLISH)
+publish = importlib.util.module_from_spec(publish_spec)
+publish_spec.loader.exec_module(publish)
+
+
+def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfinished_one(tmp_path):
+    jobs = tmp_path / "jobs"
+    for job, name in (("stated_seed0", "keyin_paper_stated_20k"), ("stated_stage2_seed0", "keyin_paper_stated_10k_5k"),
+                      ("stated_stage2_seed1", "keyin_paper_stated_10k_5k")):
+        (jobs / job / ".hydra").mkdir(parents=True)
+        (jobs / job / ".hydra" / "config.yaml").write_text(f"model:\n  name: {name}\n")
+        (jobs / job / "checkpoints").mkdir()
+        (jobs / job / "checkpoints" / "last.ckpt").write_bytes(job.encode())
+    (jobs / "stated_stage2_seed0" / "metrics.json").write_text('{"f1": 0.1}')
+    with pytest.raises(SystemExit, match="seed 1 has not finished"):
+        publish.publish(jobs, [0, 1], tmp_path / "table")
+    copied = publish.publish(jobs, [0], tmp_path / "table")
+    assert sorted(copied) == ["keyin_paper_stated_10k_5k_seed0", "keyin_paper_stated_stage1_seed0"]
+    row = tmp_path / "table" / "jobs" / "keyin_paper_stated_10k_5k_seed0"
+    assert json.loads((row / "metrics.json").read_text()) == {"f1": 0.1}
+    assert (row / "config.yaml").read_text() == "model:\n  name: keyin_paper_stated_10k_5k\n"
+    assert list(json.loads((row / "checkpoints.json").read_text())) == ["checkpoints/last.ckpt"]

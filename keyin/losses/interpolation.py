@@ -51,7 +51,7 @@ def decode_in_one_batch(decoder: Decoder, *embeddings: Tensor) -> tuple[Tensor, 
 
     A BatchNorm decoder in train mode normalises each call by that call's statistics; decoding the interpolated and
     the auto-encoded frames apart teaches it two normalisations, and its running statistics (eval mode) hold neither
-    (docs/decisions.md, "Stage 1 decodes in one batch"). One call trains the normalisation eval mode reproduces.
+    (docs/decisions.md, "One decoder batch a step"). One call trains the normalisation eval mode reproduces.
 
     Returns:
         the logits of each set, (R_i, ...).
