@@ -22,9 +22,9 @@ from keyin.data.segments import partition_segments, valid_frames
 from keyin.errors import CheckpointError
 from keyin.losses.image import model_pixel_weights
 from keyin.losses.interpolation import (
-    autoencoding_bce, autoencoding_pick, decode_in_one_batch, interpolated_outputs, interpolation_bce, offset_contrast,
-    segment_bce,
+    autoencoding_bce, autoencoding_pick, interpolated_outputs, interpolation_bce, offset_contrast, segment_bce,
 )
+from keyin.models.conv import decode_in_one_batch
 from keyin.models import InterpolatorPosterior
 from keyin.models.distributions import gaussian_kl
 from keyin.models.config import FrameModelConfig, InterpolatorConfig, picked

@@ -20,7 +20,9 @@ from torch.utils.data import Dataset
 from keyin.eval.tap import save_subgoal_grid, score_whole_clips
 from keyin.models.modes import evaluating
 from keyin.losses.image import model_pixel_weights
-from keyin.losses.tap import argmin_times, pair_autoencoding_bce, pair_bce, sample_pairs, shortest_gap, whole_clip_pairs
+from keyin.losses.tap import (
+    argmin_times, pair_autoencoding_bce, pair_bce, pair_images, sample_pairs, shortest_gap, whole_clip_pairs,
+)
 from keyin.models import TAPNetwork
 from keyin.lit.optimizers import adam
 
@@ -88,7 +90,8 @@ class TAPModule(L.LightningModule):
         (:func:`keyin.losses.tap.pair_bce`)."""
         frames, n_valid, start, goal = (x.to(self.device) for x in (frames, n_valid, start, goal))
         weights = model_pixel_weights(frames, self.hparams)
-        return pair_bce(self.network, frames, n_valid, start, goal, self.hparams.margin, weights)
+        logits = self.network(*pair_images(frames, start, goal))
+        return pair_bce(logits, frames, n_valid, start, goal, self.hparams.margin, weights)
 
     def _shared_step(self, batch: dict[str, torch.Tensor], stage: str) -> torch.Tensor:
         frames = batch["frames"]
@@ -98,7 +101,12 @@ class TAPModule(L.LightningModule):
         else:
             start, goal = whole_clip_pairs(n_valid)
         weights = model_pixel_weights(frames, self.hparams)
-        loss, argmin = pair_bce(self.network, frames, n_valid, start, goal, self.hparams.margin, weights)
+        images = pair_images(frames, start, goal)
+        if self.hparams.ae_weight > 0:  # the prediction and the auto-encoded pair in one decoder batch (BatchNorm)
+            logits, reconstruction = self.network.predict_and_reconstruct(*images)
+        else:
+            logits = self.network(*images)
+        loss, argmin = pair_bce(logits, frames, n_valid, start, goal, self.hparams.margin, weights)
         relative, at_last = argmin_times(argmin, start, goal, self.hparams.margin)
         mean_loss = loss.mean()
         terms = {
@@ -107,7 +115,7 @@ class TAPModule(L.LightningModule):
             f"{stage}/argmin_last": at_last.float().mean(),  # chosen frame = the last admissible one
         }
         if self.hparams.ae_weight > 0:
-            autoencoding = pair_autoencoding_bce(self.network, frames, start, goal, weights)
+            autoencoding = pair_autoencoding_bce(reconstruction, frames, start, goal, weights)
             terms[f"{stage}/autoencoding_per_pixel"] = autoencoding.mean() / (2 * frames[0, 0].numel())
             mean_loss = mean_loss + self.hparams.ae_weight * autoencoding.mean()
         self.log_dict(

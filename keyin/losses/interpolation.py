@@ -46,19 +46,6 @@ def segment_bce(
     return logits.new_zeros(valid.shape[0]).index_put_((valid.nonzero()[:, 0],), bce.flatten(1).sum(1), accumulate=True)
 
 
-def decode_in_one_batch(decoder: Decoder, *embeddings: Tensor) -> tuple[Tensor, ...]:
-    """Decode several sets of embeddings, each (R_i, E), in one call and split the logits back.
-
-    A BatchNorm decoder in train mode normalises each call by that call's statistics; decoding the interpolated and
-    the auto-encoded frames apart teaches it two normalisations, and its running statistics (eval mode) hold neither
-    (docs/decisions.md, "One decoder batch a step"). One call trains the normalisation eval mode reproduces.
-
-    Returns:
-        the logits of each set, (R_i, ...).
-    """
-    return decoder(torch.cat(embeddings)).split([len(part) for part in embeddings])
-
-
 def interpolation_bce(
     interpolator: Interpolator, posterior: InterpolatorPosterior | None, decoder: Decoder, embeddings: Tensor,
     frames: Tensor, weights: Tensor | None, segments: tuple[Tensor, Tensor, Tensor], latent: str, first_frame: int = 0,

@@ -11,21 +11,9 @@ Frame indices here run over the whole clip, conditioning frames included (0 … 
 
 from __future__ import annotations
 
-from typing import Protocol
-
 import torch
 import torch.nn.functional as F
 from torch import Tensor
-
-
-class PairNetwork(Protocol):
-    """What the losses use of a TAP network (:class:`keyin.models.TAPNetwork`)."""
-
-    def __call__(self, start: Tensor, goal: Tensor) -> Tensor:
-        """(B, C, H, W) logits of the frame between (B, C, H, W) ``start`` and ``goal`` frames."""
-
-    def reconstruct(self, images: Tensor) -> Tensor:
-        """(B, K, C, H, W) logits of (B, K, C, H, W) frames decoded from their own embeddings."""
 
 
 def admissible_frames(start: Tensor, goal: Tensor, n_valid: Tensor, length: int, margin: int) -> Tensor:
@@ -170,12 +158,13 @@ def min_over_time_bce(
 
 
 def pair_bce(
-    network: PairNetwork, frames: Tensor, n_valid: Tensor, start: Tensor, goal: Tensor, margin: int,
+    logits: Tensor, frames: Tensor, n_valid: Tensor, start: Tensor, goal: Tensor, margin: int,
     weights: Tensor | None = None,
 ) -> tuple[Tensor, Tensor]:
     """The min-over-time loss of the network's predictions between ``start`` and ``goal``.
 
     Args:
+        logits: (B, C, H, W) the predictions between each clip's ``start`` and ``goal`` frames (:func:`pair_images`).
         frames: (B, L, C, H, W) the clips, in [0, 1].
         n_valid: (B,) valid frames of each clip.
         start, goal: (B,) frame indices of each pair.
@@ -184,17 +173,17 @@ def pair_bce(
     Returns:
         loss (B,) and argmin (B,) of :func:`min_over_time_bce`.
     """
-    logits = network(*pair_images(frames, start, goal))
     admissible = admissible_frames(start, goal, n_valid, frames.shape[1], margin)
     return min_over_time_bce(logits, frames, admissible, weights)
 
 
 def pair_autoencoding_bce(
-    network: PairNetwork, frames: Tensor, start: Tensor, goal: Tensor, weights: Tensor | None = None
+    reconstruction: Tensor, frames: Tensor, start: Tensor, goal: Tensor, weights: Tensor | None = None
 ) -> Tensor:
     """BCE of the start and goal frames decoded from their own embeddings.
 
     Args:
+        reconstruction: (B, 2, C, H, W) logits of each clip's start and goal frames decoded from their own embeddings.
         frames: (B, L, C, H, W) the clips, in [0, 1].
         start, goal: (B,) frame indices of each pair.
         weights: (B, L, C, H, W) pixel weights of the frames, or None.
@@ -203,7 +192,7 @@ def pair_autoencoding_bce(
     """
     images = torch.stack(pair_images(frames, start, goal), dim=1)  # (B, 2, C, H, W)
     pair_weights = None if weights is None else torch.stack(pair_images(weights, start, goal), dim=1)
-    bce = F.binary_cross_entropy_with_logits(network.reconstruct(images), images, pair_weights, reduction="none")
+    bce = F.binary_cross_entropy_with_logits(reconstruction, images, pair_weights, reduction="none")
     return bce.flatten(1).sum(-1)
 
 

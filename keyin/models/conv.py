@@ -7,6 +7,7 @@ learn, which is what a linear-motion interpolator needs on the Brownian data.
 """
 
 import math
+from typing import Callable
 
 import torch
 from torch import Tensor, nn
@@ -265,3 +266,17 @@ class ConvDecoder(nn.Module):
             for layer in list(block)[1:]:  # its normalisation and activation, if any
                 features = layer(features)
         return features.contiguous()
+
+
+def decode_in_one_batch(decoder: Callable[[Tensor], Tensor], *embeddings: Tensor) -> tuple[Tensor, ...]:
+    """Decode several sets of embeddings, each (R_i, E), in one call and split the logits back.
+
+    A BatchNorm decoder in train mode normalises each call by that call's statistics; decoding two kinds of embedding
+    apart (interpolated and auto-encoded frames, a prediction and its inputs) teaches it two normalisations, and its
+    running statistics (eval mode) hold neither (docs/decisions.md, "One decoder batch a step"). One call trains the
+    normalisation eval mode reproduces.
+
+    Returns:
+        the logits of each set, (R_i, ...).
+    """
+    return decoder(torch.cat(embeddings)).split([len(part) for part in embeddings])

@@ -126,7 +126,7 @@ class SVG(nn.Module):
         if not reconstruct:
             return SVGOutput(self.decode(predicted, context), mu, log_sigma, None)
         # the predicted and the auto-encoded frames in one decoder batch: a BatchNorm decoder's eval mode then renders
-        # what training normalised (keyin.losses.interpolation.decode_in_one_batch)
+        # what training normalised (keyin.models.conv.decode_in_one_batch)
         both = self.decode(torch.cat([predicted, embeddings], dim=1), context)
         logits, reconstruction = both.split([predicted.shape[1], embeddings.shape[1]], dim=1)
         return SVGOutput(logits, mu, log_sigma, reconstruction)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
-from keyin.models.conv import ConvDecoder, ConvEncoder
+from keyin.models.conv import ConvDecoder, ConvEncoder, decode_in_one_batch
 from keyin.models.recurrent import MLP
 
 
@@ -59,7 +59,15 @@ class TAPNetwork(nn.Module):
         embeddings = self.encoder(torch.stack([start, goal], dim=1))  # (B, 2, E), one batch through the encoder
         return self.decoder(self.bottleneck(embeddings.flatten(1)))  # (B, 2E) → (B, E) → (B, C, H, W)
 
-    def reconstruct(self, images: Tensor) -> Tensor:
-        """(B, K, C, H, W) logits of (B, K, C, H, W) frames decoded from their own embeddings (the
-        bottleneck skipped: the auto-encoding term)."""
-        return self.decoder(self.encoder(images).flatten(0, 1)).view_as(images)
+    def predict_and_reconstruct(self, start: Tensor, goal: Tensor) -> tuple[Tensor, Tensor]:
+        """The frame between ``start`` and ``goal`` (B, C, H, W) and both decoded from their own embeddings (B, 2, C, H, W),
+        logits, in one encoder and one decoder batch (a BatchNorm decoder: :func:`keyin.models.conv.decode_in_one_batch`).
+
+        Args:
+            start, goal: (B, C, H, W) in [0, 1].
+        """
+        images = torch.stack([start, goal], dim=1)  # (B, 2, C, H, W)
+        embeddings = self.encoder(images)  # (B, 2, E)
+        between = self.bottleneck(embeddings.flatten(1))  # (B, E)
+        prediction, own = decode_in_one_batch(self.decoder, between, embeddings.flatten(0, 1))
+        return prediction, own.view_as(images)

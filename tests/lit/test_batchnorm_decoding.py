@@ -5,7 +5,7 @@ import torch
 
 from keyin.data.segments import partition_segments
 
-from tests.lit.tiny_models import batch, stage1, surprise
+from tests.lit.tiny_models import batch, stage1, surprise, tap
 
 
 def decoder_calls(module) -> list[tuple[torch.Tensor, torch.Tensor]]:
@@ -53,3 +53,12 @@ def test_surprise_decodes_its_predictions_and_its_autoencoded_frames_in_one_batc
     alone = module.model(clips, sample=False, reconstruct=False)  # eval mode: per-frame, so the split is exact
     together = module.model(clips, sample=False, reconstruct=True)
     torch.testing.assert_close(together.logits, alone.logits)
+
+
+def test_tap_decodes_its_prediction_and_its_autoencoded_pair_in_one_batch():
+    module = tap(norm="batch")
+    module.log_dict = lambda *args, **kwargs: None
+    calls = decoder_calls(module.network)
+    clips = batch()
+    module.training_step(clips, 0)
+    assert [len(inputs) for inputs, _ in calls] == [3 * len(clips["frames"])]  # a prediction, a start and a goal a clip

@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from keyin.lit.tap import TAPModule
-from keyin.losses.tap import pair_autoencoding_bce
+from keyin.losses.tap import pair_autoencoding_bce, pair_images
 
 pytestmark = pytest.mark.filterwarnings("ignore:You are trying to `self.log\\(\\)`")  # steps run without a Trainer here
 
@@ -83,9 +83,9 @@ def test_autoencoding_adds_the_bce_of_start_and_goal_decoded_from_their_embeddin
         images = clip[[0, last]]
         logits = network.decoder(network.encoder(images[None]).flatten(0, 1))
         expected.append(torch.nn.functional.binary_cross_entropy_with_logits(logits, images, reduction="sum"))
-    torch.testing.assert_close(
-        pair_autoencoding_bce(network, clips["frames"], torch.tensor([0, 0]), torch.tensor([8, 4])), torch.stack(expected)
-    )
+    start, goal = torch.tensor([0, 0]), torch.tensor([8, 4])
+    _, reconstruction = network.predict_and_reconstruct(*pair_images(clips["frames"], start, goal))
+    torch.testing.assert_close(pair_autoencoding_bce(reconstruction, clips["frames"], start, goal), torch.stack(expected))
     total = with_ae._shared_step(clips, "val")
     torch.testing.assert_close(total, plain._shared_step(clips, "val") + 0.5 * torch.stack(expected).mean())
     total.backward()

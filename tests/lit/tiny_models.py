@@ -51,9 +51,9 @@ def surprise() -> SurpriseModule:
                           beta=0.1, lr=1e-3, ae_weight=1.0, foreground_weight=2.0)
 
 
-def tap() -> TAPModule:
+def tap(norm: str = "group") -> TAPModule:
     torch.manual_seed(0)
-    return TAPModule(**CONV, coord_channels=True, norm="group", n_cond=N_COND, mlp_hidden=8, lr=1e-3, ae_weight=1.0,
+    return TAPModule(**CONV, coord_channels=True, norm=norm, n_cond=N_COND, mlp_hidden=8, lr=1e-3, ae_weight=1.0,
                      foreground_weight=2.0)
 
 

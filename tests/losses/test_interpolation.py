@@ -5,7 +5,8 @@ import torch
 import torch.nn.functional as F
 
 from keyin.data.segments import segment_frames, valid_frames
-from keyin.losses.interpolation import autoencoding_bce, autoencoding_pick, decode_in_one_batch, offset_contrast, segment_bce
+from keyin.losses.interpolation import autoencoding_bce, autoencoding_pick, offset_contrast, segment_bce
+from keyin.models.conv import decode_in_one_batch
 
 torch.manual_seed(0)
 DECODER = torch.nn.Sequential(torch.nn.Linear(4, 2 * 3 * 3), torch.nn.Unflatten(1, (2, 3, 3)))
