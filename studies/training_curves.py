@@ -1,11 +1,12 @@
 """Validation curves of stage-2 runs from their Lightning CSV logs: keyframe F1, distinct keyframe
 patterns among the validation clips and the offsets' entropy against the training step.
 
-    python studies/training_curves.py <label>=<run dir> [<label>=<run dir> ...] \
+    python studies/training_curves.py <label>=<run dir or metrics CSV> [...] \
         --out docs/results/stage2_curves/curves.png --table docs/results/stage2_curves/validation.csv
 
-A run dir's every ``csv/version_<n>/metrics.csv`` is read (a resumed run adds a version); rows of a
-stage other than stage 2 (no ``val/offset_entropy``) are left out. The validation rows are also written
+A run dir's every ``csv/version_<n>/metrics.csv`` is read (a resumed run adds a version), or one CSV of such rows (a job's
+committed record, docs/results/keyin_paper_stated/jobs/<job>/stage2_metrics.csv); rows of a stage other than stage 2
+(no ``val/offset_entropy``) are left out. The validation rows are also written
 as one CSV, small enough to commit, so the figure can be redrawn after the run dir is gone.
 """
 
@@ -23,10 +24,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 CURVES = {"val/f1": "keyframe F1 (argmax offsets)", "val/distinct_patterns": "distinct patterns", "val/offset_entropy": "offset entropy (nats)"}
 
 
-def validation_rows(run_dir: Path) -> list[dict[str, float]]:
-    """Stage 2's validation rows of every CSV log under ``run_dir``, by step (the last one per step)."""
+def validation_rows(run: Path) -> list[dict[str, float]]:
+    """Stage 2's validation rows of ``run`` (a metrics CSV, or every CSV log under a run dir in the order the versions
+    ran), by step (the last one per step)."""
     rows: dict[int, dict[str, float]] = {}
-    for path in sorted(run_dir.glob("csv/version_*/metrics.csv")):
+    logs = sorted(run.glob("csv/version_*/metrics.csv"), key=lambda path: int(path.parent.name.split("_")[1]))
+    for path in [run] if run.is_file() else logs:
         with open(path, newline="") as handle:
             for row in csv.DictReader(handle):
                 if row.get("val/f1") and row.get("val/offset_entropy"):
@@ -36,7 +39,7 @@ def validation_rows(run_dir: Path) -> list[dict[str, float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("runs", nargs="+", help="<label>=<run dir>")
+    parser.add_argument("runs", nargs="+", help="<label>=<run dir or metrics CSV>")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--table", type=Path, required=True)
     args = parser.parse_args()

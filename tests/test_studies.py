@@ -13,6 +13,7 @@ from readout_chain import joint_offset_keyframes, offset_log_probs  # noqa: E402
 from warm_start_arms import placement_loss, placement_over  # noqa: E402
 from stage1_latent_use import latent_use  # noqa: E402
 from supervised_offsets import PARTS, gradient_norms  # noqa: E402
+from training_curves import validation_rows  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -110,3 +111,17 @@ def test_gradient_norms_sum_each_parts_squared_gradients_and_leave_other_paramet
     assert math.isclose(norms["LSTM_inf + attention"], 2.0 * math.sqrt(2 * (2 + 1)))  # two heads of 2 + 1 numbers
     assert math.isclose(norms["LSTM_key + K̂ head"], 2.0)  # its bias alone
     assert math.isclose(norms["offset head"], 2.0 * math.sqrt(6 + 3))
+
+
+def test_validation_rows_read_a_run_dirs_versions_in_the_order_they_ran_or_one_committed_csv(tmp_path):
+    header = "step,val/f1,val/distinct_patterns,val/offset_entropy,train/loss\n"
+    for version, text in ((2, "999,0.1,3,0.5,\n1999,0.2,4,0.4,\n10,,,,7.0\n"), (10, "1999,0.3,5,0.3,\n2999,0.4,6,0.2,\n")):
+        folder = tmp_path / "run" / "csv" / f"version_{version}"
+        folder.mkdir(parents=True)
+        (folder / "metrics.csv").write_text(header + text)
+    rows = validation_rows(tmp_path / "run")
+    assert [(row["step"], row["val/f1"]) for row in rows] == [(999, 0.1), (1999, 0.3), (2999, 0.4)]  # version 10 last
+    (tmp_path / "record.csv").write_text(header + "999,0.5,2,0.1,\n5,,,,3.0\n")
+    assert validation_rows(tmp_path / "record.csv") == [
+        {"step": 999, "val/f1": 0.5, "val/distinct_patterns": 2.0, "val/offset_entropy": 0.1}
+    ]
