@@ -24,10 +24,10 @@ from keyin.losses.image import model_pixel_weights
 from keyin.losses.interpolation import (
     autoencoding_bce, autoencoding_pick, interpolated_outputs, interpolation_bce, offset_contrast, segment_bce,
 )
-from keyin.models.conv import decode_in_one_batch
 from keyin.models import InterpolatorPosterior
-from keyin.models.distributions import gaussian_kl
 from keyin.models.config import FrameModelConfig, InterpolatorConfig, picked
+from keyin.models.conv import decode_in_one_batch
+from keyin.models.distributions import gaussian_kl
 from keyin.models.keyin import stage1_networks
 from keyin.lit.optimizers import adam
 from keyin.models.state import sub_state_dict
@@ -138,8 +138,9 @@ class InterpolatorModule(L.LightningModule):
     def autoencoded_frames(
         self, clips: torch.Tensor, embeddings: torch.Tensor, weights: torch.Tensor | None, lengths: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None, int]:
-        """The frames the auto-encoding term decodes: ``ae_frames`` drawn at random among the clips' valid ones (all
-        for 0), with their embeddings (F', E) and pixel weights, and how many valid frames they were drawn from."""
+        """The frames the auto-encoding term decodes, (F', C, H, W): ``ae_frames`` drawn at random among the (B, L, C, H, W)
+        clips' valid ones (all for 0), with their embeddings (F', E) and pixel weights (F', C, H, W) or None, and how many
+        valid frames they were drawn from."""
         in_clip = valid_frames(lengths.to(clips.device), clips.shape[1])  # (B, L)
         frames, frame_emb = clips[in_clip], embeddings[in_clip]
         frame_weights = None if weights is None else weights[in_clip]
@@ -160,17 +161,18 @@ class InterpolatorModule(L.LightningModule):
         predicted, valid, positions, posterior = interpolated_outputs(
             self.interpolator, self.posterior, embeddings, segments, "posterior"
         )
-        to_decode = [predicted[valid]]
-        if not hp.frozen_frames:  # a frozen frame model has learnt to auto-encode already
-            frames, frame_emb, frame_weights, n_frames = self.autoencoded_frames(clips, embeddings, weights, lengths)
-            to_decode.append(frame_emb)
+        # a frozen frame model has learnt to auto-encode already
+        autoencoded = None if hp.frozen_frames else self.autoencoded_frames(clips, embeddings, weights, lengths)
         # one decoder batch for the interpolated and the auto-encoded frames (BatchNorm: docs/decisions.md)
-        logits, *frame_logits = decode_in_one_batch(self.decoder, *to_decode)
+        logits, *frame_logits = decode_in_one_batch(
+            self.decoder, predicted[valid], *([] if autoencoded is None else [autoencoded[1]])
+        )
         bce = segment_bce(logits, valid, clips, weights, segments[0].to(clips.device), positions)
         kl = gaussian_kl(*posterior) if posterior is not None else torch.zeros_like(bce)
         loss = bce.sum() / n_clips + hp.kl_weight * (kl.sum() / n_clips)
         logged = {"train/bce_per_frame": bce.sum() / (segments[2].sum() + 1e-9), "train/kl_per_segment": kl.mean()}
-        if frame_logits:
+        if autoencoded is not None:
+            frames, _, frame_weights, n_frames = autoencoded
             autoencoding = autoencoding_bce(frame_logits[0], frames, frame_weights, n_frames)
             loss = loss + hp.ae_weight * (autoencoding / n_clips)
             logged["train/ae_per_frame"] = autoencoding / n_frames

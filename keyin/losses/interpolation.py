@@ -1,9 +1,10 @@
 """Stage 1's training terms (paper §3.2 "Training procedure", §4): the image likelihood of interpolated segments
 and of auto-encoded frames, and the per-offset contrast that gates stage 2.
 
-The decoder is passed in as a callable ((R, E) embeddings → (R, C, H, W) logits), so these stay
-functions of tensors; ``keyin.lit.interpolator`` composes them, and the exact segmentation's segment
-costs (``keyin.decode.segment_costs``) are :func:`interpolation_bce` of every segment.
+The terms score logits, and :func:`interpolation_bce` takes the decoder as a callable ((R, E) embeddings → (R, C, H, W)
+logits), so these stay functions of tensors; ``keyin.lit.interpolator`` composes them (its training step decodes both
+terms' frames in one batch), and the exact segmentation's segment costs (``keyin.decode.segment_costs``) are
+:func:`interpolation_bce` of every segment.
 """
 
 from __future__ import annotations
