@@ -136,3 +136,22 @@ def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfin
     assert json.loads((row / "metrics.json").read_text()) == {"f1": 0.1}
     assert (row / "config.yaml").read_text() == "model:\n  name: keyin_paper_stated_10k_5k\n"
     assert list(json.loads((row / "checkpoints.json").read_text())) == ["checkpoints/last.ckpt"]
+
+
+def test_extend_goes_on_from_the_finished_job_under_the_longer_rows_name_and_never_over_its_own_checkpoint(tmp_path):
+    jobs = tmp_path / "jobs"
+    with pytest.raises(SystemExit, match="finish stated_stage2_seed0 first"):
+        carry.extend(jobs, "stated_stage2_seed0_20k", "keyframes", "stated_stage2_seed0", "keyin_paper_stated_10k_20k")
+    source = carry.job_checkpoint(jobs, "stated_stage2_seed0", "keyframes")
+    source.parent.mkdir(parents=True)
+    weights = {"w": torch.arange(3.0)}
+    torch.save({"state_dict": weights, "global_step": 5000, carry.CONFIG_KEY: {"model": {"name": "keyin_paper_stated_10k_5k"}}}, source)
+    carry.extend(jobs, "stated_stage2_seed0_20k", "keyframes", "stated_stage2_seed0", "keyin_paper_stated_10k_20k")
+    target = carry.job_checkpoint(jobs, "stated_stage2_seed0_20k", "keyframes")
+    extended = torch.load(target, weights_only=False)
+    assert extended["global_step"] == 5000 and torch.equal(extended["state_dict"]["w"], weights["w"])
+    assert extended[carry.CONFIG_KEY]["model"]["name"] == "keyin_paper_stated_10k_20k"
+    assert torch.load(source, weights_only=False)[carry.CONFIG_KEY]["model"]["name"] == "keyin_paper_stated_10k_5k"
+    torch.save({"global_step": 6500}, target)  # the longer job has gone on: extend leaves it
+    carry.extend(jobs, "stated_stage2_seed0_20k", "keyframes", "stated_stage2_seed0", "keyin_paper_stated_10k_20k")
+    assert torch.load(target, weights_only=False) == {"global_step": 6500}

@@ -6,11 +6,15 @@ bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' 
 ``models/manifest.json`` and the folder's ``models.json``; it also records the job in ``docs/results/keyin_paper_stated/jobs/<job>/``
 (committed): its metrics so far (``stage1_metrics.csv`` or ``stage2_metrics.csv``, the rows of every run, a resumed run's
 rows replacing those it repeats) and ``checkpoints.json`` (the live and the carried checkpoint's SHA-256, step and size; its
-``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from.
+``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from. ``extend`` starts a longer job from a
+finished one's last checkpoint, its optimizer and step counter included, under the longer job's row name (the run goes on
+where it stopped, so the row's curve is one run; the finished job keeps its folder and its test scores).
 
     python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> <job>      # e.g. /work/jobs stated_seed0
     python docs/results/keyin_paper_stated/scripts/carry.py restore <jobs dir> <job>
     python docs/results/keyin_paper_stated/scripts/carry.py save <jobs dir> stated_stage2_seed1 --stage keyframes
+    python docs/results/keyin_paper_stated/scripts/carry.py extend <jobs dir> stated_stage2_seed0_20k --stage keyframes \
+        --from stated_stage2_seed0 --model keyin_paper_stated_10k_20k
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from pathlib import Path
 import torch
 from omegaconf import OmegaConf
 
+from keyin.checkpoints import CONFIG_KEY
 from keyin.io import atomic_write_text, sha256_of
 
 ROOT = Path(__file__).resolve().parents[4]
@@ -137,14 +142,38 @@ def restore(jobs: Path, job: str, stage: str = "interpolator") -> None:
     print(f"{source.relative_to(ROOT)} → {target}")
 
 
+def extend(jobs: Path, job: str, stage: str, source_job: str, model: str) -> None:
+    """``job`` starts from ``source_job``'s last checkpoint, renamed to the row ``model`` it now trains as."""
+    source, target = job_checkpoint(jobs, source_job, stage), job_checkpoint(jobs, job, stage)
+    if target.is_file():
+        print(f"{target} exists: the job resumes from it")
+        return
+    if not source.is_file():
+        raise SystemExit(f"{source} is missing: finish {source_job} first (or restore it: carry.py restore)")
+    checkpoint = torch.load(source, map_location="cpu", weights_only=False)
+    checkpoint[CONFIG_KEY]["model"]["name"] = model
+    target.parent.mkdir(parents=True, exist_ok=True)
+    partial = target.with_suffix(".ckpt.partial")
+    torch.save(checkpoint, partial)
+    partial.replace(target)
+    print(f"{source} (step {checkpoint['global_step']}) → {target} as model {model}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("action", choices=("save", "restore"))
+    parser.add_argument("action", choices=("save", "restore", "extend"))
     parser.add_argument("jobs", type=Path)
     parser.add_argument("job")
     parser.add_argument("--stage", choices=tuple(STAGES), default="interpolator")
+    parser.add_argument("--from", dest="source", help="extend: the finished job to go on from")
+    parser.add_argument("--model", help="extend: the row name the longer job trains as")
     args = parser.parse_args()
-    (save if args.action == "save" else restore)(args.jobs, args.job, args.stage)
+    if args.action == "extend":
+        if not (args.source and args.model):
+            parser.error("extend needs --from <finished job> and --model <row name>")
+        extend(args.jobs, args.job, args.stage, args.source, args.model)
+    else:
+        (save if args.action == "save" else restore)(args.jobs, args.job, args.stage)
 
 
 if __name__ == "__main__":
