@@ -5,6 +5,7 @@ import math
 import sys
 from pathlib import Path
 
+import pytest
 import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
@@ -14,6 +15,7 @@ from warm_start_arms import placement_loss, placement_over  # noqa: E402
 from stage1_latent_use import latent_use  # noqa: E402
 from supervised_offsets import PARTS, gradient_norms  # noqa: E402
 from training_curves import validation_rows  # noqa: E402
+from warm_start_curves import arm_rows  # noqa: E402
 
 
 def brute_force_joint(log_offsets: torch.Tensor, length: int) -> list[int]:
@@ -125,3 +127,11 @@ def test_validation_rows_read_a_run_dirs_versions_in_the_order_they_ran_or_one_c
     assert validation_rows(tmp_path / "record.csv") == [
         {"step": 999, "val/f1": 0.5, "val/distinct_patterns": 2.0, "val/offset_entropy": 0.1}
     ]
+
+
+def test_arm_rows_read_one_arm_of_a_studys_json_and_name_the_arms_there_are(tmp_path):
+    study = tmp_path / "arms.json"
+    study.write_text('{"command": "python studies/warm_start_arms.py", "sampled": [{"step": 0, "f1": 0.87}]}')
+    assert arm_rows(f"{study}:sampled") == [{"step": 0, "f1": 0.87}]
+    with pytest.raises(SystemExit, match=r"has no arm 'tied'; it has \['sampled'\]"):
+        arm_rows(f"{study}:tied")
