@@ -101,7 +101,7 @@ class TAPModule(L.LightningModule):
         else:
             start, goal = whole_clip_pairs(n_valid)
         weights = model_pixel_weights(frames, self.hparams)
-        images = pair_images(frames, start, goal)
+        images, reconstruction = pair_images(frames, start, goal), None
         if self.hparams.ae_weight > 0:  # the prediction and the auto-encoded pair in one decoder batch (BatchNorm)
             logits, reconstruction = self.network.predict_and_reconstruct(*images)
         else:
@@ -114,7 +114,7 @@ class TAPModule(L.LightningModule):
             f"{stage}/argmin_relative": relative.mean(),  # (t - a) / (b - a) of the chosen frame
             f"{stage}/argmin_last": at_last.float().mean(),  # chosen frame = the last admissible one
         }
-        if self.hparams.ae_weight > 0:
+        if reconstruction is not None:
             autoencoding = pair_autoencoding_bce(reconstruction, frames, start, goal, weights)
             terms[f"{stage}/autoencoding_per_pixel"] = autoencoding.mean() / (2 * frames[0, 0].numel())
             mean_loss = mean_loss + self.hparams.ae_weight * autoencoding.mean()
