@@ -12,7 +12,8 @@ mkdir -p "$jobs"
 "$main/.venv/bin/keyin-generate" dataset=brownian 'splits={val: 1000, test: 1000}' data_dir="$main/data" > /dev/null  # skips finished shards
 grep -v '^#' "$scripts/jobs.txt" | while read -r kind frozen commit job seed more; do
   case $job in *stage2*) stage=keyframes ;; *) stage=interpolator ;; esac  # a finished or paused job too
-  if pgrep -f "hydra.run.dir=$jobs/$job " > /dev/null; then echo "$job is running already"; continue; fi
+  # its run dir ends the command line (stage2.sh) or an override follows it (stage1.sh); not a longer job's (..._20k)
+  if pgrep -f "hydra.run.dir=$jobs/$job( |\$)" > /dev/null; then echo "$job is running already"; continue; fi
   "$main/.venv/bin/python" "$scripts/carry.py" restore "$jobs" "$job" --stage "$stage"
   case $kind in
     finished) echo "$job is finished: its checkpoint is in place"; continue ;;
