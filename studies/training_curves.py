@@ -50,6 +50,7 @@ def main() -> None:
             axis.plot([row["step"] for row in rows], [row[key] for row in rows], marker=".", label=label)
             axis.set_title(title)
             axis.set_xlabel("stage-2 step")
+    axes[0].set_ylim(0, 1)  # F1 on its whole range: a flat curve looks flat
     axes[0].legend(fontsize=8)
     fig.tight_layout()
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -91,6 +91,21 @@ def test_a_resumed_runs_rows_replace_the_steps_it_repeats_and_every_earlier_step
     assert carry.merged_rows([committed + lost_after_checkpoint, resumed]) == merged  # the lost run's 549 replaced
 
 
+def test_the_test_row_at_step_0_of_a_finished_run_keeps_the_earlier_runs_rows_and_replaces_an_earlier_test_row():
+    def rows(*steps):
+        return [{"step": str(step), "train/loss": f"{step}.0", "test/f1": ""} for step in steps]
+
+    def tested(f1):
+        return {"step": "0", "train/loss": "", "test/f1": f1}
+
+    earlier, finished = rows(999, 1999, 2499), rows(2524, 4999) + [tested("0.137")]
+    merged = carry.merged_rows([earlier, finished])
+    assert [(row["step"], row["test/f1"]) for row in merged] == [
+        ("999", ""), ("1999", ""), ("2499", ""), ("2524", ""), ("4999", ""), ("0", "0.137")]
+    again = carry.merged_rows([merged, rows(4999) + [tested("0.140")]])  # the same end scored again
+    assert [(row["step"], row["test/f1"]) for row in again][-2:] == [("4999", ""), ("0", "0.140")] and len(again) == 6
+
+
 def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, repo):
     jobs, job = tmp_path / "jobs", "stated_seed0"
     (jobs / job / ".hydra").mkdir(parents=True)

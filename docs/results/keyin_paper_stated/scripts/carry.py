@@ -95,13 +95,22 @@ def save(jobs: Path, job: str, stage: str = "interpolator") -> Path:
     return target
 
 
+def is_test_row(row: dict[str, str]) -> bool:
+    """A row of the test scoring at the end of a job, which Lightning logs at step 0."""
+    return all(key.startswith("test/") for key, value in row.items() if value and key not in ("epoch", "step"))
+
+
 def merged_rows(runs: list[list[dict[str, str]]]) -> list[dict[str, str]]:
     """The metrics rows of a job's runs in the order they ran, each run's rows replacing the earlier rows at or after its
-    first step (a resumed run repeats the steps after its checkpoint)."""
+    first training or validation step (a resumed run repeats the steps after its checkpoint; its test row, at step 0,
+    replaces only an earlier test row)."""
     rows: list[dict[str, str]] = []
     for run in (run for run in runs if run):
-        first = min(int(row["step"]) for row in run)
-        rows = [row for row in rows if int(row["step"]) < first] + run
+        steps = [int(row["step"]) for row in run if not is_test_row(row)]
+        first = min(steps) if steps else float("inf")
+        tested = any(is_test_row(row) for row in run)
+        rows = [row for row in rows if (int(row["step"]) < first and not is_test_row(row)) or (is_test_row(row) and not tested)]
+        rows += run
     return rows
 
 

@@ -54,8 +54,9 @@ def main() -> None:
     args = parser.parse_args()
     print("copied:", ", ".join(publish(args.jobs, args.seeds)))
     if not args.no_report:
-        report = Path(sys.executable).with_name("keyin-report")
-        subprocess.run([str(report), str(TABLE / "jobs"), "--out", str(TABLE)], check=True)
+        report = Path(sys.executable).with_name("keyin-report")  # paths from the root: the report names its command
+        table = TABLE.relative_to(ROOT)
+        subprocess.run([str(report), str(table / "jobs"), "--out", str(table)], check=True, cwd=ROOT)
 
 
 if __name__ == "__main__":
