@@ -30,7 +30,7 @@ import torch
 from omegaconf import OmegaConf
 
 from keyin.checkpoints import CONFIG_KEY
-from keyin.io import atomic_write_text, sha256_of
+from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
 
 ROOT = Path(__file__).resolve().parents[4]
 FOLDER = ROOT / "models" / "in_progress"
@@ -56,6 +56,13 @@ def carried(job: str, stage: str = "interpolator") -> Path:
     return FOLDER / f"{job}_{STAGES[stage][0]}_last.ckpt"
 
 
+def write_checkpoint(path: Path, checkpoint: dict) -> None:
+    """``torch.save`` through keyin's atomic write: ``path`` keeps its old file or gets the whole new one."""
+    buffer = io.BytesIO()
+    torch.save(checkpoint, buffer)
+    atomic_write_bytes(path, buffer.getvalue())
+
+
 def slimmed(checkpoint: dict) -> dict:
     """The checkpoint with every floating optimizer state tensor (Adam's moments) in bfloat16; weights untouched."""
     for optimizer in checkpoint.get("optimizer_states", []):
@@ -71,9 +78,7 @@ def save(jobs: Path, job: str, stage: str = "interpolator") -> Path:
     checkpoint = torch.load(source, map_location="cpu", weights_only=False)
     target = carried(job, stage)
     FOLDER.mkdir(parents=True, exist_ok=True)
-    partial = target.with_suffix(".ckpt.partial")
-    torch.save(slimmed(checkpoint), partial)
-    partial.replace(target)
+    write_checkpoint(target, slimmed(checkpoint))
     card = {
         "file": target.name, "bytes": target.stat().st_size, "sha256": sha256_of(target), "command": STAGES[stage][1],
         "source_sha256": sha256_of(source), "global_step": checkpoint["global_step"], "stage": stage,
@@ -162,9 +167,7 @@ def extend(jobs: Path, job: str, stage: str, source_job: str, model: str) -> Non
     checkpoint = torch.load(source, map_location="cpu", weights_only=False)
     checkpoint[CONFIG_KEY]["model"]["name"] = model
     target.parent.mkdir(parents=True, exist_ok=True)
-    partial = target.with_suffix(".ckpt.partial")
-    torch.save(checkpoint, partial)
-    partial.replace(target)
+    write_checkpoint(target, checkpoint)
     print(f"{source} (step {checkpoint['global_step']}) → {target} as model {model}")
 
 

@@ -28,7 +28,7 @@ STAGE1 = "stated_seed0"
 def job_names(jobs: Path, seeds: list[int]) -> dict[str, Path]:
     """Table job name → the finished run folder of each seed and of the shared stage 1; a seed not finished is an error
     that names what is missing and how to finish it."""
-    named = {f"keyin_paper_stated_stage1_seed0": jobs / STAGE1}
+    named = {"keyin_paper_stated_stage1_seed0": jobs / STAGE1}
     for seed in seeds:
         folder = jobs / f"stated_stage2_seed{seed}"
         if not (folder / "metrics.json").is_file():
