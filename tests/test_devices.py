@@ -34,8 +34,9 @@ def test_keyin_eval_device_cuda_without_a_gpu_is_one_error_line(tmp_path):
     assert result.stderr.strip().splitlines()[-1].startswith("error: device=cuda: this machine has no GPU")
 
 
-@pytest.mark.parametrize("command", ["keyin.cli.discover", "keyin.cli.eval"])
-def test_the_keyframe_commands_import_neither_lightning_nor_torch_before_they_run(command):
+@pytest.mark.parametrize("command", ["keyin.cli.discover", "keyin.cli.eval", "keyin.cli.train", "keyin.cli.plan",
+                                     "keyin.cli.report", "keyin.cli.reproduce"])
+def test_the_commands_import_neither_lightning_nor_torch_before_they_run(command):
     probe = f"import sys, {command}; print(sorted({{'lightning', 'torch', 'matplotlib'}} & set(sys.modules)))"
     assert subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout.strip() == "[]"
 

@@ -8,27 +8,25 @@ the last line printed) holds the mean ± std position error and the success rate
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from hydra.utils import instantiate
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
-from keyin.data.hdf5 import split_files
-from keyin.data.pushing import PLANNING_SPLIT
 from keyin.errors import ConfigError, DatasetFormatError
-from keyin.eval.planning import planning_summary
 from keyin.io import sha256_of
 from keyin.planning.journal import claim_run_dir
-from keyin.planning.runner import PlanJob, run_tasks
-from keyin.planning.servo import ServoParams
-from keyin.planning.tasks import PlanningTask, read_tasks, task_generator
 from keyin.pretrained import resolve
+
+if TYPE_CHECKING:  # numpy, scipy, h5py and the planners are imported when the command runs: --help answers at once
+    from keyin.planning.tasks import PlanningTask
 
 
 def task_files(cfg: DictConfig) -> list[Path]:
+    from keyin.data.hdf5 import split_files
+    from keyin.data.pushing import PLANNING_SPLIT
+
     if cfg.data is not None:
         return [Path(cfg.data)]
     try:
@@ -81,6 +79,14 @@ def check_plan(cfg: DictConfig) -> float:
 
 @user_errors
 def plan(cfg: DictConfig) -> dict:
+    import numpy as np
+    from hydra.utils import instantiate
+
+    from keyin.eval.planning import planning_summary
+    from keyin.planning.runner import PlanJob, run_tasks
+    from keyin.planning.servo import ServoParams
+    from keyin.planning.tasks import read_tasks, task_generator
+
     threshold = check_plan(cfg)
     servo = ServoParams.from_config(cfg.planner)
     controller = instantiate(cfg.planner.controller)  # a learned planner loads (and checks) its checkpoint

@@ -14,26 +14,12 @@ import json
 import math
 from datetime import date
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import torch
-from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from keyin.cli.app import fail
-from keyin.data.datamodule import split_clips
 from keyin.errors import KeyinError
-from keyin.eval.planning_report import (
-    collect_planning,
-    difference_markdown,
-    machines_markdown,
-    outcome_markdown,
-    planning_csv,
-    planning_markdown,
-    sensitivity_markdown,
-    success_curves,
-    summarise_planning,
-    sweep_threshold,
-)
 from keyin.eval.report import (
     brief_table,
     collect_metrics,
@@ -47,7 +33,9 @@ from keyin.eval.report import (
 )
 from keyin.io import atomic_write_text
 from keyin.paths import inside
-from keyin.viz.report import save_f1_bars, save_method_comparison, save_success_curves
+
+if TYPE_CHECKING:  # torch, the datasets, scipy and matplotlib are imported where a table needs them: --help answers at once
+    import torch
 
 
 def example_predictions(records: list[dict], dataset: str) -> tuple[Path, dict[str, list[list[int]]], list[list[int]]]:
@@ -86,6 +74,11 @@ def job_config(job: Path) -> Path:
 
 def example_clips(job: Path, count: int) -> tuple[torch.Tensor, int]:
     """The first ``count`` test clips of the job's dataset, rebuilt from its saved Hydra config."""
+    import torch
+    from hydra.utils import instantiate
+
+    from keyin.data.datamodule import split_clips
+
     cfg = OmegaConf.load(job_config(job))
     dataset = cfg.dataset
     clips = split_clips(dataset, instantiate(dataset.generator), "test", None, job_data_dir(job, cfg.data_dir))
@@ -113,6 +106,20 @@ def described(sweep: list[Path]) -> str:
 
 def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> list[Path]:
     """``table2.md``, ``table2.csv`` and ``table2_success.png`` (success rate against the threshold)."""
+    from keyin.eval.planning_report import (
+        collect_planning,
+        difference_markdown,
+        machines_markdown,
+        outcome_markdown,
+        planning_csv,
+        planning_markdown,
+        sensitivity_markdown,
+        success_curves,
+        summarise_planning,
+        sweep_threshold,
+    )
+    from keyin.viz.report import save_success_curves
+
     jobs = collect_planning(sweep)
     threshold = sweep_threshold(jobs) if threshold is None else threshold
     rows = summarise_planning(jobs, threshold)
@@ -150,6 +157,8 @@ def planning_table(sweep: list[Path], out: Path, threshold: float | None) -> lis
 
 def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
     """``table1.md``, ``table1.csv``, ``table1_f1.png`` and the example figures."""
+    from keyin.viz.report import save_f1_bars, save_method_comparison
+
     records = collect_metrics(sweep)
     rows = summarise(records)
     header = (

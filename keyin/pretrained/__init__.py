@@ -11,12 +11,13 @@ from __future__ import annotations
 import io
 import json
 from pathlib import Path
-from typing import Any, Mapping
-
-import torch
+from typing import TYPE_CHECKING, Any, Mapping
 
 from keyin.errors import CheckpointError
 from keyin.io import atomic_write_bytes, atomic_write_text, sha256_of
+
+if TYPE_CHECKING:  # torch is imported where a checkpoint is read or written: naming a model does not load it
+    import torch
 
 PREFIX = "pretrained:"
 FOLDER = Path(__file__).parent
@@ -67,12 +68,16 @@ def slim_checkpoint(checkpoint: Mapping[str, Any]) -> dict[str, Any]:
 
 def full_precision(state_dict: Mapping[str, torch.Tensor]) -> dict[str, torch.Tensor]:
     """A state dict with its half-precision tensors in float32 (a slimmed checkpoint's weights)."""
+    import torch
+
     return {name: value.float() if value.dtype == torch.float16 else value for name, value in state_dict.items()}
 
 
 def export(checkpoint: Mapping[str, Any], name: str, card: Mapping[str, Any], folder: Path = FOLDER) -> Path:
     """Write ``checkpoint`` slimmed as ``<folder>/<name>.ckpt`` and register it (with ``card``: the
     training command, the source checkpoint's hash, ...) in ``models.json``."""
+    import torch
+
     buffer = io.BytesIO()
     torch.save(slim_checkpoint(checkpoint), buffer)
     folder.mkdir(parents=True, exist_ok=True)
