@@ -1,5 +1,5 @@
-"""How fast the commands start: wall seconds of ``keyin-discover --help``, ``keyin-eval --help`` and
-``keyin-discover ckpt=pretrained:brownian`` on a 1200-frame mp4 of the Brownian generator
+"""How fast the commands start: wall seconds of every command's ``--help``, ``keyin-train --cfg job``
+and ``keyin-discover ckpt=pretrained:brownian`` on a 1200-frame mp4 of the Brownian generator
 (``pictures=false``), each run several times (min / median / max), and the heaviest imports of
 ``keyin.cli.discover`` once its task runs (``python -X importtime``).
 
@@ -41,7 +41,8 @@ def wall_seconds(command: list[str], cwd: Path, runs: int) -> list[float]:
     times = []
     for run in range(runs):
         started = time.perf_counter()
-        subprocess.run([*command, *([f"hydra.run.dir=run{run}"] if "--help" not in command else [])], cwd=cwd,
+        runs_a_job = not any(argument.startswith("--") for argument in command)  # --help, --cfg: no run dir
+        subprocess.run([*command, *([f"hydra.run.dir=run{run}"] if runs_a_job else [])], cwd=cwd,
                        check=True, capture_output=True)
         times.append(time.perf_counter() - started)
     return times
@@ -72,12 +73,17 @@ def main() -> None:
         folder = Path(tmp)
         brownian_mp4(folder / "video.mp4", args.frames)
         commands = {
-            "keyin-discover --help": [str(SCRIPTS / "keyin-discover"), "--help"],
-            "keyin-eval --help": [str(SCRIPTS / "keyin-eval"), "--help"],
+            f"keyin-{name} --help": [str(SCRIPTS / f"keyin-{name}"), "--help"]
+            for name in ("discover", "eval", "train", "plan", "report")
+        }
+        commands.update({
+            "keyin-reproduce table=brownian_table1 --help": [str(SCRIPTS / "keyin-reproduce"), "table=brownian_table1", "--help"],
+            "keyin-train experiment=brownian_keyin_stated --cfg job": [
+                str(SCRIPTS / "keyin-train"), "experiment=brownian_keyin_stated", "--cfg", "job"],
             f"keyin-discover ckpt=pretrained:brownian input=video.mp4 ({args.frames} frames) pictures=false": [
                 str(SCRIPTS / "keyin-discover"), "ckpt=pretrained:brownian", "input=video.mp4", "pictures=false",
                 "progress=false"],
-        }
+        })
         for name, command in commands.items():
             times = wall_seconds(command, folder, args.runs)
             rows.append(f"| `{name}` | {min(times):.2f} | {statistics.median(times):.2f} | {max(times):.2f} |")
