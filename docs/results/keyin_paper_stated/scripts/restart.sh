@@ -4,6 +4,7 @@
 # checkpoint put back (carry.py restore, when the machine was replaced), then this checkout's scripts/<kind>.sh resumed in
 # the background (a finished or paused job: its checkpoint put back only).
 #   sh docs/results/keyin_paper_stated/scripts/restart.sh [<jobs dir>]     (from the main checkout, .venv installed)
+# THREADS=2 in its environment gives each job it resumes two torch threads (one job alone on the 2-core machine).
 set -eu
 main=$(git rev-parse --show-toplevel)
 jobs=${1:-/work/jobs}

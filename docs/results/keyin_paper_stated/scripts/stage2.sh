@@ -6,6 +6,7 @@
 # seeds run 5000 steps (job stated_stage2_seed<seed>); a longer budget (item 4's curve, job
 # stated_stage2_seed<seed>_<steps/1000>k) goes on from that job's finished checkpoint (carry.py extend).
 #   sh docs/results/keyin_paper_stated/scripts/stage2.sh <seed> <steps> <jobs dir> <data dir>
+# THREADS=<n> (default 1) sets its torch threads: 2 where it has the machine's two cores to itself.
 set -eu
 seed=$1; steps=$2; jobs=$3; data=$4
 job=stated_stage2_seed$seed; model=keyin_paper_stated_10k_$((steps / 1000))k
@@ -16,6 +17,6 @@ fi
 stage1="$jobs/stated_seed0/checkpoints/interpolator/last.ckpt"
 python -c "import sys, torch; step = torch.load(sys.argv[1], map_location='cpu', weights_only=False)['global_step']
 sys.exit(0 if step >= 10000 else f'{sys.argv[1]} is at step {step} of 10000: finish stage 1 first (stage1.sh 0 ...)')" "$stage1"
-OMP_NUM_THREADS=1 exec keyin-train experiment=brownian_keyin_stated stage=keyframes seed="$seed" \
+OMP_NUM_THREADS=${THREADS:-1} exec keyin-train experiment=brownian_keyin_stated stage=keyframes seed="$seed" \
   interpolator_ckpt="$stage1" scale.stage2_steps="$steps" model.name="$model" \
   data_dir="$data" hydra.run.dir="$jobs/$job"
