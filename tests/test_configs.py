@@ -253,11 +253,20 @@ def test_the_stated_configuration_composes_to_every_value_the_paper_states():
     assert (paper_scale["scale"]["stage1_steps"], paper_scale["scale"]["stage2_steps"]) == (100_000, 200_000)
 
 
-def test_the_stated_rows_job_config_holds_every_value_the_paper_states():
-    job = OmegaConf.load(ROOT / "docs/results/keyin_paper_stated/jobs/stated_seed0/config.yaml")  # as the job ran
-    for key, value in STATED.items():
-        assert OmegaConf.select(job, key) == value, (key, OmegaConf.select(job, key), value)
-    assert job.model.name == "keyin_paper_stated_20k"
+def test_the_stated_rows_job_configs_hold_every_value_the_paper_states():
+    """The stage 1 and every published stage-2 seed of the row README names (`keyin_paper_stated_10k_5k`), as they ran."""
+    stage1 = ROOT / "docs/results/keyin_paper_stated/jobs/stated_seed0/config.yaml"
+    seeds = sorted((ROOT / "docs/results/brownian_table1/jobs").glob("keyin_paper_stated_10k_5k_seed*/config.yaml"))
+    assert len(seeds) >= 2
+    for path in (stage1, *seeds):
+        job = OmegaConf.load(path)
+        for key, value in STATED.items():
+            assert OmegaConf.select(job, key) == value, (path, key, OmegaConf.select(job, key), value)
+        assert job.backbone.name == "paper" and job.scale.stage1_steps == 10_000, path
+    assert OmegaConf.load(stage1).model.name == "keyin_paper_stated_20k"
+    for path in seeds:  # the budget in the row's name: 10k + 5k of the paper's 100k + 200k steps
+        job = OmegaConf.load(path)
+        assert (job.model.name, job.scale.stage2_steps, job.stage) == ("keyin_paper_stated_10k_5k", 5000, "keyframes"), path
 
 
 def test_our_frame_model_keeps_what_the_keyin_paper_rows_ran():
