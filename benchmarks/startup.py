@@ -39,9 +39,9 @@ def brownian_mp4(path: Path, frames: int) -> Path:
 
 def wall_seconds(command: list[str], cwd: Path, runs: int) -> list[float]:
     times = []
+    runs_a_job = not any(argument.startswith("--") for argument in command)  # --help, --cfg: no run dir
     for run in range(runs):
         started = time.perf_counter()
-        runs_a_job = not any(argument.startswith("--") for argument in command)  # --help, --cfg: no run dir
         subprocess.run([*command, *([f"hydra.run.dir=run{run}"] if runs_a_job else [])], cwd=cwd,
                        check=True, capture_output=True)
         times.append(time.perf_counter() - started)
