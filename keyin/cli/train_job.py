@@ -46,30 +46,34 @@ def stage1_checkpoint(cfg: DictConfig, stage1_folder: Path) -> Path | str:
     return path
 
 
-def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder: Path) -> Discoverers:
-    """KEYIN, Jumpy, Static: stage 1 (into ``stage1_dir`` if set, else this run), then stage 2."""
+def train_two_stages(cfg: DictConfig, datamodule: Callable, common: dict, folder: Path) -> tuple[Discoverers, float]:
+    """KEYIN, Jumpy, Static: stage 1 (into ``stage1_dir`` if set, else this run), then stage 2; the discoverers and the
+    job's training seconds (a stage 1 shared through ``stage1_dir`` counts in the jobs that trained it)."""
     scale = cfg.scale
     stage1_folder = Path(cfg.stage1_dir) if cfg.stage1_dir else folder
+    seconds = 0.0
     if cfg.stage in ("both", "interpolator"):
         interpolator = instantiate(cfg.model.interpolator)
         if cfg.backbone.frozen_frames:  # backbone=frames: a frame autoencoder's encoder and decoder
             interpolator.load_frame_model(load_checkpoint(cfg.backbone.frames_ckpt, "frames"), cfg.backbone.frames_ckpt)
         with namespace(common["logger"], "stage1"):  # in the trackers: stage1/train/..., then the method's train/...
-            fit_stage(
+            fit = fit_stage(
                 interpolator,
                 datamodule=datamodule(scale.stage1_batch_size),
                 max_steps=scale.stage1_steps,
                 **dict(common, run_dir=stage1_folder),
             )
+        seconds += fit.seconds if fit.trained or stage1_folder == folder else 0.0
     if cfg.stage == "interpolator":
-        return {}
+        return {}, seconds
     stage1 = load_stage1(stage1_checkpoint(cfg, stage1_folder))
     module = instantiate(cfg.model.keyframes, stage1=stage1["hyper_parameters"])
     module.load_stage1(stage1["state_dict"])
     if cfg.init_ckpt:  # a warm start; a resumed run's last.ckpt then replaces these weights
         warm_start(module, cfg.init_ckpt)
-    fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common)
-    return module.to(choose_device(cfg.device)).reader().discoverers(cfg.model.name)  # the fit hands it back on the CPU
+    seconds += fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=scale.stage2_steps, **common).seconds
+    discoverers = module.to(choose_device(cfg.device)).reader().discoverers(cfg.model.name)  # the fit hands it back on the CPU
+    return discoverers, seconds
 
 
 def run_job(cfg: DictConfig, folder: Path) -> dict | None:
@@ -102,19 +106,19 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         config=OmegaConf.to_container(cfg, resolve=True),
         compile_networks=cfg.compile,
     )
-    module, started = None, time.perf_counter()
+    module, train_seconds = None, 0.0
     if not cfg.model.trainable:
         discoverers = {cfg.model.name: instantiate(cfg.model.discoverer)}
     elif "module" in cfg.model:  # one stage (Surprise, TAP)
         module = instantiate(cfg.model.module)
-        fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=cfg.model.steps, **common)
+        train_seconds = fit_stage(module, datamodule=datamodule(scale.batch_size), max_steps=cfg.model.steps, **common).seconds
         discoverers = module.to(device).discoverers(cfg.model.name)  # the fit hands it back on the CPU
     else:
-        discoverers = train_two_stages(cfg, datamodule, common, folder)
+        discoverers, train_seconds = train_two_stages(cfg, datamodule, common, folder)
     if not cfg.evaluate or not is_rank_zero():  # under DDP, rank 0 alone scores and writes metrics.json
         return None
-    # wall times of this process (a resumed job counts its last part only), on torch's threads
-    times = {"train_seconds": round(time.perf_counter() - started, 1), "threads": torch.get_num_threads()}
+    # wall times: the stages' fits over every run that resumed them, then this process's scoring; on torch's threads
+    times = {"train_seconds": round(train_seconds, 1), "threads": torch.get_num_threads()}
     started = time.perf_counter()
     if discoverers:
         metrics = score_methods(discoverers, test, dataset.n_cond, dataset.n_future, folder)

@@ -36,7 +36,7 @@ SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "f1_tol2_interior", "f1_tol2", "precision", "recall",
     "n_predicted", "hausdorff", "train_seconds", "score_seconds",
 )  # the information rule's columns (docs/evaluation.md) first; a keyin 0.1 job has only the rest
-TIMES = ("train_seconds", "score_seconds")  # a job's wall times in its process, where it recorded them
+TIMES = ("train_seconds", "score_seconds")  # a job's wall times training and scoring, where it recorded them
 
 
 @dataclass
@@ -237,8 +237,8 @@ def brief_table(records: list[dict[str, Any]]) -> str:
 def markdown_table(rows: list[TableRow]) -> str:
     """Table 1 as Markdown: F1 mean ± std over seeds in the information rule's two columns
     (interior, with ends; docs/evaluation.md) and as the method gives its keyframes, the paper's F1,
-    and companions, each job's wall time in its process (mean over seeds; a stage 1 shared by several
-    jobs counts in the one that trained it, a resumed job its last part only); the paper's methods first, our additions after them (``row``: :func:`row_source`) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
+    and companions, each job's wall time training (over every run that resumed it) and scoring (mean over seeds; a
+    stage 1 shared by several jobs counts in the one that trained it); the paper's methods first, our additions after them (``row``: :func:`row_source`) (the mean Hausdorff distance in frames; –: a job written before the column existed)."""
     lines = [
         "| dataset | method | row | F1 interior | F1 with ends | F1 as given | F1 (paper) | ±1 F1 interior | ±1 F1 as given "
         "| ±2 F1 interior | precision | recall | keyframes/clip | Hausdorff | train + score (min) | seeds |",

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 import warnings
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, NamedTuple, Sequence
 
 import lightning as L
 import torch
@@ -42,6 +43,45 @@ class FiniteLoss(L.Callback):
                 f"lower the learning rate ({LEARNING_RATES.get(module.stage, 'lr')}=...) and run the same "
                 f"command again"
             )
+
+
+class TrainingTime(L.Callback):
+    """The wall seconds a stage has trained (validation included), summed over every run that resumed it: kept in
+    its checkpoints (``callbacks["TrainingTime"]["seconds"]``), so a job stopped and resumed reports its whole time."""
+
+    def __init__(self, clock: Callable[[], float] = time.perf_counter) -> None:
+        self.clock = clock
+        self.earlier = 0.0  # the runs before this one, from the checkpoint it resumed
+        self.started: float | None = None
+
+    @property
+    def seconds(self) -> float:
+        return self.earlier + (0.0 if self.started is None else self.clock() - self.started)
+
+    def on_train_start(self, trainer: L.Trainer, module: L.LightningModule) -> None:
+        self.started = self.clock()
+
+    def on_train_end(self, trainer: L.Trainer, module: L.LightningModule) -> None:
+        self.earlier, self.started = self.seconds, None  # stopped: the final checkpoint and the caller read the same
+
+    def state_dict(self) -> dict[str, float]:
+        return {"seconds": self.seconds}
+
+    def load_state_dict(self, state_dict: dict[str, float]) -> None:
+        self.earlier = float(state_dict["seconds"])
+
+
+def training_seconds(checkpoint: Mapping[str, Any]) -> float:
+    """The seconds :class:`TrainingTime` kept in a loaded checkpoint; 0 for a checkpoint older than it."""
+    return float(checkpoint.get("callbacks", {}).get("TrainingTime", {}).get("seconds", 0.0))
+
+
+class StageFit(NamedTuple):
+    """What :func:`fit_stage` leaves."""
+
+    last: Path  # the stage's last checkpoint
+    seconds: float  # wall seconds the stage has trained, over every run of it (:class:`TrainingTime`)
+    trained: bool  # whether this call trained it (False: it had its steps already and was only loaded)
 
 
 class FinalCheckpoint(L.Callback):
@@ -109,7 +149,7 @@ def fit_stage(
     logger: Any,
     config: dict[str, Any],
     compile_networks: bool = False,
-) -> Path:
+) -> StageFit:
     """Train ``module`` to ``max_steps``, resuming from ``checkpoints/<stage>/last.ckpt`` if present;
     a stage that has reached ``max_steps`` already is only loaded (its file keeps its bytes and hash).
     Beside ``last.ckpt`` the stage keeps ``best.ckpt`` (:func:`stage_checkpoints`).
@@ -117,7 +157,7 @@ def fit_stage(
     ``compile_networks`` compiles each of the module's networks in place (:func:`compile_in_place`).
 
     Returns:
-        The path of the stage's last checkpoint.
+        The stage's last checkpoint, its training time over all its runs, and whether this call trained it.
     """
     if compile_networks:
         compile_in_place(module)
@@ -126,6 +166,7 @@ def fit_stage(
     trainer_kwargs = dict(trainer_kwargs)
     trainer_kwargs["log_every_n_steps"] = logging_interval(trainer_kwargs.get("log_every_n_steps", 50), max_steps)
     progress = [step_progress()] if trainer_kwargs.get("enable_progress_bar", True) else []
+    timer = TrainingTime()
     trainer = L.Trainer(
         **trainer_kwargs,
         max_steps=max_steps,
@@ -133,7 +174,7 @@ def fit_stage(
         check_val_every_n_epoch=None,
         logger=logger,
         callbacks=[*stage_checkpoints(folder, module, checkpoint_every), RunConfigInCheckpoint(config), FiniteLoss(),
-                   ValidationPictures(Path(run_dir) / "pictures"), FinalCheckpoint(last), RankSeeds(config.get("seed", 0)),
+                   ValidationPictures(Path(run_dir) / "pictures"), timer, FinalCheckpoint(last), RankSeeds(config.get("seed", 0)),
                    *progress],
         default_root_dir=str(run_dir),
         plugins=[AtomicCheckpointIO()],
@@ -146,7 +187,7 @@ def fit_stage(
         if 0 <= max_steps <= saved.get("global_step", 0):  # finished: its weights, and its file left as it is
             log.info("%s: %s has its %d steps; loaded, not trained again", module.stage, resume, max_steps)
             module.load_state_dict(saved["state_dict"])
-            return last
+            return StageFit(last, training_seconds(saved), trained=False)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r"Checkpoint directory .* exists and is not empty")  # resumed here by design
         frozen = getattr(module, "frozen_by_design", None)
@@ -155,4 +196,4 @@ def fit_stage(
             log.info("%s stay frozen in eval mode (by design)", frozen)
         # weights_only: resuming unpickles nothing but tensors and primitives (a checkpoint cannot run code).
         trainer.fit(module, datamodule=datamodule, ckpt_path=resume, weights_only=True)
-    return last
+    return StageFit(last, timer.seconds, trained=True)

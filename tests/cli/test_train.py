@@ -92,13 +92,15 @@ def test_eval_scores_the_chosen_rules_on_the_first_clips(trained):
 
 
 def test_resume_continues_in_the_same_run_dir_without_redoing_steps(trained):
-    """A finished stage is loaded, not fitted again: same scores, and its file keeps its bytes (its hash)."""
+    """A finished stage is loaded, not fitted again: same scores, the same training time (its stages' own, kept in
+    their checkpoints), and its file keeps its bytes (its hash)."""
     root, metrics = trained
     files = {stage: root / "run" / "checkpoints" / stage / "last.ckpt" for stage in ("interpolator", "keyframes")}
     before = {stage: path.read_bytes() for stage, path in files.items()}
     result = run("train", *KEYIN_SMOKE, "resume=run", cwd=root)
     assert result.returncode == 0, result.stderr
-    assert last_json(result.stdout)["f1"] == metrics["f1"]
+    resumed = last_json(result.stdout)
+    assert resumed["f1"] == metrics["f1"] and resumed["train_seconds"] == metrics["train_seconds"] > 0
     assert {stage: path.read_bytes() for stage, path in files.items()} == before
     assert load_checkpoint(files["keyframes"])["global_step"] == 3
 

@@ -1,5 +1,7 @@
 """fit_stage's checkpoints: the final one, the full state at the last step, saved while the fit's own
-loader runs; and the best by the module's monitored validation metric."""
+loader runs; the best by the module's monitored validation metric; and the stage's training time over its runs."""
+
+import time
 
 import lightning as L
 import torch
@@ -8,7 +10,7 @@ from torchdata.stateful_dataloader import StatefulDataLoader
 
 from keyin.data.datamodule import ClipDataModule
 from keyin.lit.checkpoints import load_checkpoint
-from keyin.lit.run import fit_stage
+from keyin.lit.run import TrainingTime, fit_stage, training_seconds
 
 
 class Numbers(Dataset):
@@ -37,16 +39,47 @@ class Line(L.LightningModule):
         return torch.optim.Adam(self.parameters(), lr=0.1)
 
 
+TRAINER = dict(accelerator="cpu", devices=1, enable_progress_bar=False, enable_model_summary=False, num_sanity_val_steps=0)
+
+
+def test_the_training_time_adds_a_resumed_run_to_the_runs_before_it():
+    now = [100.0]
+    timer = TrainingTime(clock=lambda: now[0])
+    timer.load_state_dict({"seconds": 10.0})  # the runs before, from the checkpoint resumed
+    timer.on_train_start(None, None)
+    now[0] = 103.5
+    assert timer.seconds == 13.5 and timer.state_dict() == {"seconds": 13.5}  # a checkpoint saved mid-run
+    timer.on_train_end(None, None)
+    now[0] = 200.0  # stopped: later reads do not grow
+    assert timer.seconds == 13.5 and timer.state_dict() == {"seconds": 13.5}
+    assert training_seconds({"callbacks": {}}) == 0.0  # a checkpoint older than the count
+
+
+def test_a_resumed_stage_reports_its_time_over_both_runs_and_a_finished_one_reloaded_the_same(tmp_path):
+    torch.manual_seed(0)
+    data = ClipDataModule(Numbers(), Numbers(), batch_size=4, num_workers=0)
+    fit = lambda steps: fit_stage(Line(), data, tmp_path, max_steps=steps, val_every=2, checkpoint_every=2,  # noqa: E731
+                                  trainer_kwargs=TRAINER, logger=False, config={})
+    first = fit(3)
+    assert first.trained and first.seconds > 0
+    assert training_seconds(load_checkpoint(first.last, "line")) == first.seconds
+    started = time.perf_counter()
+    second = fit(6)  # resumes at step 3
+    wall = time.perf_counter() - started
+    assert second.trained and first.seconds < second.seconds <= first.seconds + wall
+    assert training_seconds(load_checkpoint(second.last, "line")) == second.seconds
+    again = fit(6)  # has its steps: loaded, not trained
+    assert again == (second.last, second.seconds, False)
+
+
 def test_the_last_checkpoint_holds_the_final_step_and_starts_no_extra_loader_worker(tmp_path, monkeypatch):
     started = []
     get_iterator = StatefulDataLoader._get_iterator
     monkeypatch.setattr(StatefulDataLoader, "_get_iterator", lambda self: started.append(self) or get_iterator(self))
     torch.manual_seed(0)
     data = ClipDataModule(Numbers(), Numbers(), batch_size=4, num_workers=1)
-    trainer_kwargs = dict(accelerator="cpu", devices=1, enable_progress_bar=False, enable_model_summary=False,
-                          num_sanity_val_steps=0)
-    last = fit_stage(Line(), data, tmp_path, max_steps=5, val_every=4, checkpoint_every=4,
-                     trainer_kwargs=trainer_kwargs, logger=False, config={})
+    last, _, _ = fit_stage(Line(), data, tmp_path, max_steps=5, val_every=4, checkpoint_every=4,
+                           trainer_kwargs=TRAINER, logger=False, config={})
     saved = load_checkpoint(last, "line")
     assert saved["global_step"] == 5 and saved["optimizer_states"]  # the last step, off the cadence of 4
     assert len(started) == 1  # the fit's loader only: the final state is read from its worker
