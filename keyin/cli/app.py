@@ -145,6 +145,18 @@ def hydra_message(err: Exception) -> str:
     return "; ".join(parts)
 
 
+def help_without_choice(message: str, program: str, argv: list[str]) -> str | None:
+    """What ``--help`` prints where the config cannot compose without a choice (``keyin-reproduce --help``, no
+    ``table=``): Hydra composes the config to show it, so it names the choice and how to see the help; None where
+    ``argv`` asks no help or ``message`` (:func:`hydra_message`) is another error."""
+    group, _, options = message.partition("You must specify '")[2].partition("'")
+    if not group or not {"--help", "-h"} & set(argv):
+        return None
+    options = options.partition("Available options:")[2].strip()
+    return (f"{program} composes its config from {group}=<option> (one of: {options}); its help shows that config: "
+            f"{program} {group}=<option> --help")
+
+
 @contextlib.contextmanager
 def hydra_raises() -> Iterator[None]:
     """Let Hydra raise its errors (``HYDRA_FULL_ERROR=1``) instead of printing them and exiting 1."""
@@ -179,7 +191,10 @@ def keyin_main(config_name: str) -> Callable[[Callable[[DictConfig], Any]], Call
                 try:
                     hydra_main()
                 except (ConfigCompositionException, OverrideParseException) as err:
-                    fail(hydra_message(err))
+                    usage = help_without_choice(hydra_message(err), f"keyin-{config_name}", sys.argv[1:])
+                    if usage is None:
+                        fail(hydra_message(err))
+                    print(usage)
                 except (OSError, ValueError) as err:  # Hydra creating the run dir or its log file
                     fail_if_refused(err)
                     raise

@@ -2,6 +2,7 @@
 
 import json
 
+from keyin.cli.app import help_without_choice
 from tests.cli.runner import run
 
 TINY_TABLE = (
@@ -130,3 +131,20 @@ def test_a_sweep_puts_the_shared_lists_it_names_before_its_own_overrides_and_an_
     table.sweeps[1].share = ["stage_2"]
     with pytest.raises(ConfigError, match=r"table.sweeps\[1\].share names \['stage_2'\], which table.shared does not hold"):
         check_table(OmegaConf.create({"steps": ["jobs"], "table": table}))
+
+
+def test_help_before_the_table_names_the_tables_and_how_to_see_the_help(tmp_path):
+    result = run("reproduce", "--help", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "table=<option> (one of: brownian_table1," in result.stdout and "table=<option> --help" in result.stdout
+    bare = run("reproduce", cwd=tmp_path)  # no help asked: the missing table is an error
+    assert bare.returncode == 2 and "You must specify 'table'" in bare.stderr and not bare.stdout
+
+
+def test_help_without_choice_reads_only_a_missing_choice_with_help_asked():
+    missing = "You must specify 'table', e.g, table=<OPTION>; Available options: a, b"
+    assert help_without_choice(missing, "keyin-x", ["-h"]) == (
+        "keyin-x composes its config from table=<option> (one of: a, b); its help shows that config: "
+        "keyin-x table=<option> --help")
+    assert help_without_choice(missing, "keyin-x", ["seed=1"]) is None
+    assert help_without_choice("Could not override 'foo'", "keyin-x", ["--help"]) is None
