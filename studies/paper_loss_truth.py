@@ -16,6 +16,9 @@ left (a stage-1 or stage-2 checkpoint, or ``pretrained:<name>``). For each readi
    ("free", as the predictor's embedding head is) or tied to its soft target K̃^e(δ) ("tied": the
    keyframes follow δ exactly and L_ke = 0).
 
+With ``--exact-slots``, also (issue 62 item 3d) the descents with M equal to each clip's labelled keyframes plus the
+one leaving the clip, clips grouped by their count: no spare keyframe slot, so L_inter cannot buy extra keyframes.
+
 Also stage 1's interpolation cost per frame of straight segments (no turn inside) by their length.
 The keyframe KL of eq. 3 is left out: without a predictor there is no posterior.
 """
@@ -27,7 +30,7 @@ import json
 import math
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from datetime import date
 from pathlib import Path
 from typing import Any
@@ -88,6 +91,13 @@ class Clips:
     future: Tensor  # (B, N, D) frames in [0, 1]
     lengths: Tensor  # (B,)
     truth: list[list[int]]  # labelled keyframes per clip
+
+
+def subset(clips: Clips, index: list[int]) -> Clips:
+    """The clips at ``index``."""
+    rows = torch.tensor(index)
+    tensors = {name: getattr(clips, name)[rows] for name in ("first", "boundary_emb", "future_emb", "future", "lengths")}
+    return replace(clips, **tensors, truth=[clips.truth[i] for i in index])
 
 
 class Stage1:
@@ -256,6 +266,33 @@ def descend(
     return rows
 
 
+def exact_slot_descents(
+    reading: Reading, stage1: Stage1, clips: Clips, keyframes: Tensor, steps: int, lr: float, every: list[int]
+) -> dict[str, Any]:
+    """Descents from the truth and from uniform offsets (free and tied K̂) with M = K + 1 for the clips with K labelled
+    keyframes, group by group; ``by_count``: each group's rows, ``end``: the last rows' F1 and keyframes per clip
+    averaged over the clips."""
+    groups: dict[int, list[int]] = {}
+    for clip, keys in enumerate(clips.truth):
+        groups.setdefault(len(keys), []).append(clip)
+    by_count: dict[int, dict[str, Any]] = {}
+    for count, index in sorted(groups.items()):
+        group = subset(clips, index)
+        truth = true_offsets(keyframes[torch.tensor(index)], group.lengths, count + 1, stage1.max_offset)
+        runs: dict[str, Any] = {"clips": len(index)}
+        for tied in (False, True):
+            mode = "tied" if tied else "free"
+            runs[f"from_truth_{mode}"] = descend(reading, stage1, truth, group, tied, steps, lr, every)
+            runs[f"from_uniform_{mode}"] = descend(reading, stage1, None, group, tied, steps, lr, every, count + 1)
+        by_count[count] = runs
+    end = {}
+    for run in ("from_truth_free", "from_truth_tied", "from_uniform_free", "from_uniform_tied"):
+        weights = [runs["clips"] for runs in by_count.values()]
+        end[run] = {key: sum(w * runs[run][-1][key] for w, runs in zip(weights, by_count.values())) / sum(weights)
+                    for key in ("f1", "keys")}
+    return {"by_count": by_count, "end": end}
+
+
 def straight_segment_costs(stage1: Stage1, clips: Clips) -> dict[int, float]:
     """Stage 1's interpolation BCE per frame of straight segments (no labelled keyframe before their
     end), by segment length, z = 0."""
@@ -283,6 +320,8 @@ def main() -> None:
     parser.add_argument("--readings", nargs="*", default=[r.name for r in READINGS], choices=[r.name for r in READINGS])
     parser.add_argument("--json", type=Path, help="also write every number as JSON here")
     parser.add_argument("--uniform", action="store_true", help="also descend from uniform offsets (free and tied K̂)")
+    parser.add_argument("--exact-slots", action="store_true",
+                        help="also descend with M = each clip's labelled keyframes + 1, from the truth and from uniform")
     args = parser.parse_args()
     torch.manual_seed(0)
     module, config = load_trained_module(args.ckpt, args.stage)
@@ -314,6 +353,8 @@ def main() -> None:
             for tied in (False, True):
                 entry[f"from_uniform_{'tied' if tied else 'free'}"] = descend(
                     reading, stage1, None, clips, tied, args.steps, args.lr, every, n_keys)
+        if args.exact_slots:
+            entry["exact_slots"] = exact_slot_descents(reading, stage1, clips, batch["keyframes"], args.steps, args.lr, every)
         results[reading.name] = entry
         print(reading.name, json.dumps({k: v for k, v in entry.items() if k != "reading"})[:600], flush=True)
         if args.json:  # after each reading: a stopped run keeps what it measured
@@ -323,7 +364,7 @@ def main() -> None:
     command = (f"python studies/paper_loss_truth.py {args.ckpt}" + (f" --stage {args.stage}" if args.stage != "keyframes" else "")
                + f" --clips {args.clips} --steps {args.steps} --lr {args.lr}"
                + (f" --readings {' '.join(args.readings)}" if len(args.readings) < len(READINGS) else "")
-               + (" --uniform" if args.uniform else ""))
+               + (" --uniform" if args.uniform else "") + (" --exact-slots" if args.exact_slots else ""))
     lines = [
         f"# Does the paper's loss hold the true keyframes? Stage 1 of `{args.ckpt}`",
         "",
@@ -349,6 +390,17 @@ def main() -> None:
             f"{coll_free[0]['f1']:.3f} → {coll_free[-1]['f1']:.3f} | {coll_free[-1]['total']:.4g} | "
             f"{truth_tied[0]['f1']:.3f} → {truth_tied[-1]['f1']:.3f} ({truth_tied[-1]['keys']:.2f}) |"
         )
+    if args.exact_slots:
+        lines += ["", f"M = each clip's labelled keyframes + 1 (no spare slot), clips grouped by their count; F1 (interior "
+                  f"keyframes per clip) after {args.steps} steps, averaged over the clips; with M = {n_keys} above for comparison:", "",
+                  "| reading | from truth, free K̂ | from truth, tied K̂ | from uniform, free K̂ | from uniform, tied K̂ | clips by count |",
+                  "|---|---|---|---|---|---|"]
+        for reading in readings:
+            exact = results[reading.name]["exact_slots"]
+            cells = [f"{exact['end'][run]['f1']:.3f} ({exact['end'][run]['keys']:.2f})"
+                     for run in ("from_truth_free", "from_truth_tied", "from_uniform_free", "from_uniform_tied")]
+            counts = ", ".join(f"{count}: {runs['clips']}" for count, runs in exact["by_count"].items())
+            lines.append(f"| {reading.name} | {' | '.join(cells)} | {counts} |")
     lines += ["", "Readings:", "", *(f"- `{r.name}`: {r.text}" for r in readings), "",
               "Every number (descent rows at steps " + ", ".join(map(str, every)) + "): the JSON file beside this one."]
     publish("\n".join(lines) + "\n", args.out)
