@@ -106,7 +106,7 @@ def test_the_test_row_at_step_0_of_a_finished_run_keeps_the_earlier_runs_rows_an
     assert [(row["step"], row["test/f1"]) for row in again][-2:] == [("4999", ""), ("0", "0.140")] and len(again) == 6
 
 
-def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, repo):
+def test_save_records_the_jobs_config_and_metrics_across_its_runs_beside_its_checkpoint_hashes(tmp_path, repo):
     jobs, job = tmp_path / "jobs", "stated_seed0"
     (jobs / job / ".hydra").mkdir(parents=True)
     (jobs / job / ".hydra" / "config.yaml").write_text("model:\n  name: keyin_paper_stated_20k\n")
@@ -123,6 +123,7 @@ def test_save_records_the_jobs_metrics_across_its_runs_beside_its_checkpoint_has
     carry.save(jobs, job)
     assert (folder / "stage1_metrics.csv").read_text() == (
         "epoch,step,train/loss,val/bce\n0,24,9.0,\n0,49,7.5,\n0,49,,3.0\n0,74,7.0,\n")
+    assert (folder / "config.yaml").read_text() == "model:\n  name: keyin_paper_stated_20k\n"  # the job's composed config
     cards = json.loads((folder / "checkpoints.json").read_text())
     assert cards["note"] == "in progress" and cards["checkpoints/interpolator/last.ckpt"]["global_step"] == 50
     assert cards["carried"]["sha256"] == carry.sha256_of(carry.carried(job))

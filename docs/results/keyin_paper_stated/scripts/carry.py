@@ -4,8 +4,8 @@ A session's machine may be replaced before the next session, and git-ignored run
 writes the job's ``last.ckpt`` into ``models/in_progress/`` (committed): the weights as they are, Adam's moments in
 bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' float32 on resume), and lists it in
 ``models/manifest.json`` and the folder's ``models.json``; it also records the job in ``docs/results/keyin_paper_stated/jobs/<job>/``
-(committed): its metrics so far (``stage1_metrics.csv`` or ``stage2_metrics.csv``, the rows of every run, a resumed run's
-rows replacing those it repeats) and ``checkpoints.json`` (the live and the carried checkpoint's SHA-256, step and size; its
+(committed): its composed ``config.yaml``, its metrics so far (``stage1_metrics.csv`` or ``stage2_metrics.csv``, the rows of
+every run, a resumed run's rows replacing those it repeats) and ``checkpoints.json`` (the live and the carried checkpoint's SHA-256, step and size; its
 ``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from. ``extend`` starts a longer job from a
 finished one's last checkpoint, its optimizer and step counter included, under the longer job's row name (the run goes on
 where it stopped, so the row's curve is one run; the finished job keeps its folder and its test scores).
@@ -124,9 +124,10 @@ def read_rows(path: Path) -> list[dict[str, str]]:
 
 
 def record(jobs: Path, job: str, stage: str, live: dict, carried_file: dict) -> None:
-    """The job's metrics and checkpoint hashes into its committed folder (see the module's docstring)."""
+    """The job's config, metrics and checkpoint hashes into its committed folder (see the module's docstring)."""
     folder = RECORDS / job
     folder.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(folder / "config.yaml", (jobs / job / ".hydra" / "config.yaml").read_text())
     metrics = folder / f"{STAGES[stage][0]}_metrics.csv"
     versions = sorted((jobs / job / "csv").glob("version_*/metrics.csv"), key=lambda p: int(p.parent.name.split("_")[1]))
     rows = merged_rows([read_rows(metrics)] + [read_rows(path) for path in versions])
