@@ -266,6 +266,9 @@ def descend(
     return rows
 
 
+EXACT_SLOT_RUNS = ("from_truth_free", "from_truth_tied", "from_uniform_free", "from_uniform_tied")
+
+
 def exact_slot_descents(
     reading: Reading, stage1: Stage1, clips: Clips, keyframes: Tensor, steps: int, lr: float, every: list[int]
 ) -> dict[str, Any]:
@@ -285,11 +288,9 @@ def exact_slot_descents(
             runs[f"from_truth_{mode}"] = descend(reading, stage1, truth, group, tied, steps, lr, every)
             runs[f"from_uniform_{mode}"] = descend(reading, stage1, None, group, tied, steps, lr, every, count + 1)
         by_count[count] = runs
-    end = {}
-    for run in ("from_truth_free", "from_truth_tied", "from_uniform_free", "from_uniform_tied"):
-        weights = [runs["clips"] for runs in by_count.values()]
-        end[run] = {key: sum(w * runs[run][-1][key] for w, runs in zip(weights, by_count.values())) / sum(weights)
-                    for key in ("f1", "keys")}
+    n_clips = len(clips.truth)
+    end = {run: {key: sum(runs["clips"] * runs[run][-1][key] for runs in by_count.values()) / n_clips for key in ("f1", "keys")}
+           for run in EXACT_SLOT_RUNS}
     return {"by_count": by_count, "end": end}
 
 
@@ -397,8 +398,7 @@ def main() -> None:
                   "|---|---|---|---|---|---|"]
         for reading in readings:
             exact = results[reading.name]["exact_slots"]
-            cells = [f"{exact['end'][run]['f1']:.3f} ({exact['end'][run]['keys']:.2f})"
-                     for run in ("from_truth_free", "from_truth_tied", "from_uniform_free", "from_uniform_tied")]
+            cells = [f"{exact['end'][run]['f1']:.3f} ({exact['end'][run]['keys']:.2f})" for run in EXACT_SLOT_RUNS]
             counts = ", ".join(f"{count}: {runs['clips']}" for count, runs in exact["by_count"].items())
             lines.append(f"| {reading.name} | {' | '.join(cells)} | {counts} |")
     lines += ["", "Readings:", "", *(f"- `{r.name}`: {r.text}" for r in readings), "",
