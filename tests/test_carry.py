@@ -5,8 +5,10 @@ import importlib.util
 import json
 from pathlib import Path
 
+import lightning as L
 import pytest
 import torch
+from lightning.pytorch.callbacks import ModelCheckpoint
 
 SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "keyin_paper_stated" / "scripts" / "carry.py"
 spec = importlib.util.spec_from_file_location("carry", SCRIPT)
@@ -53,11 +55,11 @@ def test_restore_puts_the_carried_file_where_the_job_resumes_and_never_over_a_ne
     monkeypatch.setattr(carry, "ROOT", tmp_path)
     monkeypatch.setattr(carry, "FOLDER", tmp_path / "models" / "in_progress")
     carry.FOLDER.mkdir(parents=True)
-    (carry.FOLDER / "stated_seed0_stage1_last.ckpt").write_bytes(b"carried")
+    torch.save({"global_step": 2000}, carry.FOLDER / "stated_seed0_stage1_last.ckpt")
     jobs = tmp_path / "jobs"
     carry.restore(jobs, "stated_seed0")
     target = carry.job_checkpoint(jobs, "stated_seed0")
-    assert target.read_bytes() == b"carried"
+    assert torch.load(target, weights_only=False) == {"global_step": 2000}
     target.write_bytes(b"newer")
     carry.restore(jobs, "stated_seed0")
     assert target.read_bytes() == b"newer"
@@ -171,3 +173,50 @@ def test_extend_goes_on_from_the_finished_job_under_the_longer_rows_name_and_nev
     torch.save({"global_step": 6500}, target)  # the longer job has gone on: extend leaves it
     carry.extend(jobs, "stated_stage2_seed0_20k", "keyframes", "stated_stage2_seed0", "keyin_paper_stated_10k_20k")
     assert torch.load(target, weights_only=False) == {"global_step": 6500}
+
+
+class Line(L.LightningModule):
+    def __init__(self) -> None:
+        super().__init__()
+        self.weight = torch.nn.Parameter(torch.zeros(1))
+
+    def training_step(self, batch: list[torch.Tensor], batch_idx: int) -> torch.Tensor:
+        return ((self.weight - batch[0]) ** 2).mean()
+
+    def configure_optimizers(self) -> torch.optim.Optimizer:
+        return torch.optim.Adam(self.parameters(), lr=0.1)
+
+
+def fit_line(folder: Path, steps: int, resume: Path | None = None) -> None:
+    """Lightning's own ``last.ckpt`` every 2 steps (its version counter on, as in the commits the jobs run)."""
+    data = torch.utils.data.DataLoader(torch.utils.data.TensorDataset(torch.arange(40.0)[:, None]), batch_size=4)
+    checkpoints = ModelCheckpoint(dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=2)
+    trainer = L.Trainer(max_steps=steps, callbacks=[checkpoints], logger=False, enable_progress_bar=False,
+                        enable_model_summary=False, accelerator="cpu")
+    trainer.fit(Line(), data, ckpt_path=resume)
+
+
+def test_an_extended_or_restored_job_saves_over_its_own_last_checkpoint_not_beside_it(tmp_path, repo):
+    jobs = tmp_path / "jobs"
+    source = carry.job_checkpoint(jobs, "stated_stage2_seed0", "keyframes")
+    fit_line(source.parent, 4)
+    checkpoint = torch.load(source, weights_only=False)
+    checkpoint[carry.CONFIG_KEY] = {"model": {"name": "keyin_paper_stated_10k_5k"}}
+    torch.save(checkpoint, source)
+    carry.extend(jobs, "stated_stage2_seed0_20k", "keyframes", "stated_stage2_seed0", "keyin_paper_stated_10k_20k")
+    target = carry.job_checkpoint(jobs, "stated_stage2_seed0_20k", "keyframes")
+    fit_line(target.parent, 6, resume=target)
+    assert [p.name for p in target.parent.iterdir()] == ["last.ckpt"]
+    assert torch.load(target, weights_only=False)["global_step"] == 6
+
+    versioned = target.with_name("last-v1.ckpt")  # a carried file Lightning had saved beside last.ckpt
+    checkpoint = torch.load(target, weights_only=False)
+    for state in checkpoint["callbacks"].values():
+        state["last_model_path"] = str(versioned)
+    carry.FOLDER.mkdir(parents=True)
+    carry.write_checkpoint(carry.carried("stated_stage2_seed0_20k", "keyframes"), checkpoint)
+    target.unlink()  # the machine replaced
+    carry.restore(jobs, "stated_stage2_seed0_20k", "keyframes")
+    fit_line(target.parent, 8, resume=target)
+    assert [p.name for p in target.parent.iterdir()] == ["last.ckpt"]
+    assert torch.load(target, weights_only=False)["global_step"] == 8

@@ -129,10 +129,12 @@ def logging_interval(configured: int, max_steps: int) -> int:
 
 def stage_checkpoints(folder: Path, module: L.LightningModule, checkpoint_every: int) -> list[ModelCheckpoint]:
     """``last.ckpt`` every ``checkpoint_every`` steps, and ``best.ckpt`` at the validation that scored best
-    by the module's ``monitor`` (name, "min" or "max"), in ``folder``."""
+    by the module's ``monitor`` (name, "min" or "max"), in ``folder``. Both overwrite their file: a run resumed from a
+    ``last.ckpt`` another folder wrote (a copied or extended run) would otherwise save beside it as ``last-v1.ckpt``."""
     monitor, mode = module.monitor
     return [
-        ModelCheckpoint(dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=checkpoint_every),
+        ModelCheckpoint(dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=checkpoint_every,
+                        enable_version_counter=False),
         ModelCheckpoint(dirpath=folder, filename=BEST, monitor=monitor, mode=mode, save_top_k=1,
                         auto_insert_metric_name=False, enable_version_counter=False),
     ]

@@ -1,6 +1,7 @@
 """fit_stage's checkpoints: the final one, the full state at the last step, saved while the fit's own
 loader runs; the best by the module's monitored validation metric; and the stage's training time over its runs."""
 
+import shutil
 import time
 
 import lightning as L
@@ -85,3 +86,17 @@ def test_the_last_checkpoint_holds_the_final_step_and_starts_no_extra_loader_wor
     assert len(started) == 1  # the fit's loader only: the final state is read from its worker
     assert saved["loops"]["fit_loop"]["state_dict"]["combined_loader"][0]["_snapshot"]["_snapshot_step"] == 5  # where it stopped
     assert load_checkpoint(tmp_path / "checkpoints" / "line" / "best.ckpt")["global_step"] == 4  # its one validation
+
+
+def test_a_run_resumed_from_a_last_checkpoint_another_folder_wrote_saves_over_it_not_beside_it(tmp_path):
+    torch.manual_seed(0)
+    data = ClipDataModule(Numbers(), Numbers(), batch_size=4, num_workers=0)
+    fit = lambda folder, steps: fit_stage(Line(), data, folder, max_steps=steps, val_every=8,  # noqa: E731
+                                          checkpoint_every=2, trainer_kwargs=TRAINER, logger=False, config={})
+    first = fit(tmp_path / "first", 4)
+    copied = tmp_path / "longer" / "checkpoints" / "line" / "last.ckpt"
+    copied.parent.mkdir(parents=True)
+    shutil.copy(first.last, copied)  # its callbacks' state names the first folder
+    longer = fit(tmp_path / "longer", 7)  # saves at steps 6 and 7
+    assert longer.last == copied and load_checkpoint(copied, "line")["global_step"] == 7
+    assert sorted(path.name for path in copied.parent.glob("last*")) == ["last.ckpt"]

@@ -6,7 +6,8 @@ bfloat16 (torch's ``Optimizer.load_state_dict`` casts them back to the weights' 
 ``models/manifest.json`` and the folder's ``models.json``; it also records the job in ``docs/results/keyin_paper_stated/jobs/<job>/``
 (committed): its composed ``config.yaml``, its metrics so far (``stage1_metrics.csv`` or ``stage2_metrics.csv``, the rows of
 every run, a resumed run's rows replacing those it repeats) and ``checkpoints.json`` (the live and the carried checkpoint's SHA-256, step and size; its
-``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from. ``extend`` starts a longer job from a
+``note`` is kept). ``restore`` puts the checkpoint back where the job resumes from (its periodic saves overwriting that file:
+:func:`owning_last`). ``extend`` starts a longer job from a
 finished one's last checkpoint, its optimizer and step counter included, under the longer job's row name (the run goes on
 where it stopped, so the row's curve is one run; the finished job keeps its folder and its test scores).
 
@@ -23,6 +24,7 @@ import argparse
 import csv
 import io
 import json
+import os
 from datetime import date
 from pathlib import Path
 
@@ -70,6 +72,18 @@ def slimmed(checkpoint: dict) -> dict:
             for key, value in state.items():
                 if key != "step" and torch.is_tensor(value) and value.is_floating_point():
                     state[key] = value.to(torch.bfloat16)
+    return checkpoint
+
+
+def owning_last(checkpoint: dict, path: Path) -> dict:
+    """The checkpoint with its ``save_last`` ModelCheckpoint's state pointing at ``path``, the job's own ``last.ckpt``.
+
+    Lightning overwrites a ``last.ckpt`` only where the state it resumes says it wrote that file; a checkpoint from another
+    folder (``extend``) or one saved as ``last-v1.ckpt`` would make the job's periodic saves go to a versioned file
+    (``last-v1.ckpt``) that it does not resume from."""
+    for key, state in checkpoint.get("callbacks", {}).items():
+        if key.startswith("ModelCheckpoint") and state.get("last_model_path"):
+            state["dirpath"], state["last_model_path"] = os.path.realpath(path.parent), os.path.realpath(path)
     return checkpoint
 
 
@@ -153,7 +167,7 @@ def restore(jobs: Path, job: str, stage: str = "interpolator") -> None:
         print(f"no {source.relative_to(ROOT)}: the job starts from scratch")
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_bytes(source.read_bytes())
+    write_checkpoint(target, owning_last(torch.load(source, map_location="cpu", weights_only=False), target))
     print(f"{source.relative_to(ROOT)} → {target}")
 
 
@@ -168,7 +182,7 @@ def extend(jobs: Path, job: str, stage: str, source_job: str, model: str) -> Non
     checkpoint = torch.load(source, map_location="cpu", weights_only=False)
     checkpoint[CONFIG_KEY]["model"]["name"] = model
     target.parent.mkdir(parents=True, exist_ok=True)
-    write_checkpoint(target, checkpoint)
+    write_checkpoint(target, owning_last(checkpoint, target))
     print(f"{source} (step {checkpoint['global_step']}) → {target} as model {model}")
 
 
