@@ -19,7 +19,10 @@ left (a stage-1 or stage-2 checkpoint, or ``pretrained:<name>``). For each readi
 With ``--exact-slots``, also (issue 62 item 3d) the descents with M equal to each clip's labelled keyframes plus the
 one leaving the clip, clips grouped by their count: no spare keyframe slot, so L_inter cannot buy extra keyframes.
 
-Also stage 1's interpolation cost per frame of straight segments (no turn inside) by their length.
+Also stage 1's interpolation cost per frame of straight segments (no turn inside) by their length. The frame networks
+normalise by their running statistics (eval mode), or with ``--batch-statistics`` by each call's batch, as in a stage 2
+that trains them (the stated configuration freezes only LSTM_inter; its stage 1 decoded in two calls a step, so its
+running statistics fit neither: docs/decisions.md, "One decoder batch a step").
 The keyframe KL of eq. 3 is left out: without a predictor there is no posterior.
 """
 
@@ -103,7 +106,7 @@ def subset(clips: Clips, index: list[int]) -> Clips:
 class Stage1:
     """The frozen encoder, decoder and interpolator of a checkpoint (stage 1 or stage 2)."""
 
-    def __init__(self, module: Any) -> None:
+    def __init__(self, module: Any, batch_statistics: bool = False) -> None:
         holder = getattr(module, "model", module)
         self.encoder, self.decoder, self.interpolator = holder.encoder, holder.decoder, holder.interpolator
         config = getattr(module, "config", None)  # a stage-2 reader's KEYINConfig; a stage-1 module's hparams
@@ -111,6 +114,9 @@ class Stage1:
         self.n_cond, self.max_offset = sizes["n_cond"], sizes["max_offset"]
         for network in (self.encoder, self.decoder, self.interpolator):
             network.eval().requires_grad_(False)
+        if batch_statistics:  # as in a stage 2 that trains the frame networks (only LSTM_inter frozen): train mode
+            self.encoder.train()
+            self.decoder.train()
 
     def clips(self, batch: dict[str, Tensor]) -> Clips:
         with torch.no_grad():
@@ -323,10 +329,13 @@ def main() -> None:
     parser.add_argument("--uniform", action="store_true", help="also descend from uniform offsets (free and tied K̂)")
     parser.add_argument("--exact-slots", action="store_true",
                         help="also descend with M = each clip's labelled keyframes + 1, from the truth and from uniform")
+    parser.add_argument("--batch-statistics", action="store_true",
+                        help="the frame encoder and decoder normalise each call by its own batch (train mode), as in the "
+                             "stated stage 2, which trains them; default: their running statistics (eval mode)")
     args = parser.parse_args()
     torch.manual_seed(0)
     module, config = load_trained_module(args.ckpt, args.stage)
-    stage1 = Stage1(module)
+    stage1 = Stage1(module, args.batch_statistics)
     dataset, batch = split_batch(config["dataset"]["name"], args.split, args.clips, args.data_dir)
     clips = stage1.clips(batch)
     n_keys = dataset.n_keyframes
@@ -365,13 +374,16 @@ def main() -> None:
     command = (f"python studies/paper_loss_truth.py {args.ckpt}" + (f" --stage {args.stage}" if args.stage != "keyframes" else "")
                + f" --clips {args.clips} --steps {args.steps} --lr {args.lr}"
                + (f" --readings {' '.join(args.readings)}" if len(args.readings) < len(READINGS) else "")
-               + (" --uniform" if args.uniform else "") + (" --exact-slots" if args.exact_slots else ""))
+               + (" --uniform" if args.uniform else "") + (" --exact-slots" if args.exact_slots else "")
+               + (" --batch-statistics" if args.batch_statistics else ""))
     lines = [
         f"# Does the paper's loss hold the true keyframes? Stage 1 of `{args.ckpt}`",
         "",
         f"`{command}` ({len(clips.truth)} {args.split} clips of {dataset.name}; collapsed pattern: every {constant} frames; "
         f"{cpu_model()}, {torch.get_num_threads()} thread(s), {date.today()}, {seconds / 60:.1f} min). "
-        "Free per-clip offset logits θ and keyframe embeddings K̂ in place of the predictor (studies/paper_loss_truth.py).",
+        "Free per-clip offset logits θ and keyframe embeddings K̂ in place of the predictor (studies/paper_loss_truth.py); "
+        + ("the frame encoder and decoder normalise by each call's batch (train mode)." if args.batch_statistics
+           else "the frame networks normalise by their running statistics (eval mode)."),
         "",
         "Stage 1's interpolation BCE per frame of straight segments, by length (nats): "
         + ", ".join(f"{k}: {v:.1f}" for k, v in results["straight_cost_per_frame"].items()),

@@ -167,8 +167,8 @@ def keyframe_table(sweep: list[Path], out: Path, n_examples: int) -> list[Path]:
         f"mean ± std over seeds (n − 1), exact-match micro F1 on the test clips: *interior* leaves a "
         f"padded clip's last valid frame out of labels and predictions, *with ends* gives it to every "
         f"method, *as given* scores each method's own keyframes (docs/evaluation.md). *train + score*: "
-        f"each job's wall time training, over every run that resumed it (a job written before 2026-12-07: in "
-        f"its last process only), and scoring, mean over the seeds that recorded it (named where some did not); "
+        f"each job's wall time training, over every run that resumed it (a job run by code before a5978bf, "
+        f"2026-12-07: in its last process only), and scoring, mean over the seeds that recorded it (named where some did not); "
         f"a stage 1 shared by a seed's jobs counts only in the job that trained it. Scales: "
         f"{', '.join(sorted({str(r['scale']) for r in records if r.get('scale')})) or '– (evaluation jobs only)'}.\n\n"
     )
