@@ -156,6 +156,20 @@ def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfin
     assert list(json.loads((row / "checkpoints.json").read_text())) == ["checkpoints/last.ckpt"]
 
 
+def test_publish_takes_a_longer_budgets_job_under_its_own_row(tmp_path):
+    jobs = tmp_path / "jobs"
+    for job, name in (("stated_seed0", "keyin_paper_stated_20k"), ("stated_stage2_seed0", "keyin_paper_stated_10k_5k"),
+                      ("stated_stage2_seed0_20k", "keyin_paper_stated_10k_20k")):
+        (jobs / job / ".hydra").mkdir(parents=True)
+        (jobs / job / ".hydra" / "config.yaml").write_text(f"model:\n  name: {name}\n")
+        (jobs / job / "metrics.json").write_text('{"f1": 0.2}')
+    named = publish.job_names(jobs, [0], steps=20000)
+    assert named == {"keyin_paper_stated_stage1_seed0": jobs / "stated_seed0",
+                     "keyin_paper_stated_10k_20k_seed0": jobs / "stated_stage2_seed0_20k"}
+    with pytest.raises(SystemExit, match="stated_stage2_seed0_40k/metrics.json is missing"):
+        publish.job_names(jobs, [0], steps=40000)
+
+
 def test_extend_goes_on_from_the_finished_job_under_the_longer_rows_name_and_never_over_its_own_checkpoint(tmp_path):
     jobs = tmp_path / "jobs"
     with pytest.raises(SystemExit, match="finish stated_stage2_seed0 first"):
