@@ -137,14 +137,19 @@ publish = importlib.util.module_from_spec(publish_spec)
 publish_spec.loader.exec_module(publish)
 
 
-def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfinished_one(tmp_path):
-    jobs = tmp_path / "jobs"
-    for job, name in (("stated_seed0", "keyin_paper_stated_20k"), ("stated_stage2_seed0", "keyin_paper_stated_10k_5k"),
-                      ("stated_stage2_seed1", "keyin_paper_stated_10k_5k")):
+def job_folders(jobs: Path, rows: dict[str, str]) -> None:
+    """A run folder per job, its Hydra config naming its row, and a last checkpoint."""
+    for job, name in rows.items():
         (jobs / job / ".hydra").mkdir(parents=True)
         (jobs / job / ".hydra" / "config.yaml").write_text(f"model:\n  name: {name}\n")
         (jobs / job / "checkpoints").mkdir()
         (jobs / job / "checkpoints" / "last.ckpt").write_bytes(job.encode())
+
+
+def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfinished_one(tmp_path):
+    jobs = tmp_path / "jobs"
+    job_folders(jobs, {"stated_seed0": "keyin_paper_stated_20k", "stated_stage2_seed0": "keyin_paper_stated_10k_5k",
+                       "stated_stage2_seed1": "keyin_paper_stated_10k_5k"})
     (jobs / "stated_stage2_seed0" / "metrics.json").write_text('{"f1": 0.1}')
     with pytest.raises(SystemExit, match="seed 1 has not finished"):
         publish.publish(jobs, [0, 1], tmp_path / "table")
@@ -158,10 +163,9 @@ def test_publish_copies_finished_seeds_under_their_row_name_and_refuses_an_unfin
 
 def test_publish_takes_a_longer_budgets_job_under_its_own_row(tmp_path):
     jobs = tmp_path / "jobs"
-    for job, name in (("stated_seed0", "keyin_paper_stated_20k"), ("stated_stage2_seed0", "keyin_paper_stated_10k_5k"),
-                      ("stated_stage2_seed0_20k", "keyin_paper_stated_10k_20k")):
-        (jobs / job / ".hydra").mkdir(parents=True)
-        (jobs / job / ".hydra" / "config.yaml").write_text(f"model:\n  name: {name}\n")
+    job_folders(jobs, {"stated_seed0": "keyin_paper_stated_20k", "stated_stage2_seed0": "keyin_paper_stated_10k_5k",
+                       "stated_stage2_seed0_20k": "keyin_paper_stated_10k_20k"})
+    for job in ("stated_stage2_seed0", "stated_stage2_seed0_20k"):
         (jobs / job / "metrics.json").write_text('{"f1": 0.2}')
     named = publish.job_names(jobs, [0], steps=20000)
     assert named == {"keyin_paper_stated_stage1_seed0": jobs / "stated_seed0",
