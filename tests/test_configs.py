@@ -14,6 +14,7 @@ from omegaconf import OmegaConf
 from keyin.cli.reproduce import sweep_overrides
 from keyin.cli.app import CONFIG_MODULE
 from keyin.cli.checks import SCALE_KEYS
+from keyin.eval.report import STATED_CHOICES
 from keyin.planning.servo import ServoParams
 from tests.cli.runner import error_line, run
 from tests.configs import CONFIGS, OLD_SMOKE, OLD_SMOKE_KEYIN, OLD_SMOKE_TWO_STAGES
@@ -214,21 +215,10 @@ def test_pushing_irregular_is_pushing_with_irregular_timing():
 
 # Every choice the paper states (section 4, appendix 6; docs/decisions.md, "The paper's stated configuration"):
 # the config key, and the value the paper gives.
-STATED = {
-    "model.keyframes.lstm_hidden": 256, "model.keyframes.lstm_layers": 2,  # "a simple two-layer LSTM with a
-    "model.interpolator.lstm_hidden": 256, "model.interpolator.lstm_layers": 2,  # 256-dimensional state ... for all"
-    "model.interpolator.mlp_hidden": 256,
-    "model.keyframes.lr": 2e-4, "model.interpolator.lr": 2e-4,  # "a learning rate of 2e-4"
-    "scale.batch_size": 30, "scale.stage1_batch_size": 30,  # "batch size of 30"
+STATED = {  # every value the paper states for KEYIN on Brownian: those of every dataset, then the dataset's own
+    **STATED_CHOICES,
     "model.interpolator.offset_min": 2, "model.interpolator.offset_max": 8,  # "segments of two to eight frames"
-    "model.interpolator.kl_weight": 1e-3,  # "The KL-divergence term for the interpolator VAE is 10^-3"
-    "model.keyframes.beta_ke": 1.0, "model.keyframes.beta_ki": 0.0, "model.keyframes.beta_kl": 0.05,
-    "model.keyframes.frozen": "lstm_inter",  # "we freeze LSTM_inter weights"
-    "model.keyframes.delta_input": "argmax",  # Init_inter = MLP(K^e,t-1, K^e,t, δ̂^t), δ̂ = argmax δ
-    "model.keyframes.n_keyframes": 6, "dataset.max_offset": 10, "dataset.n_cond": 5, "dataset.n_future": 30,
-    "model.interpolator.foreground_weight": 1.0,  # "sigmoid and ... BCE loss": the plain BCE
-    "model.keyframes.teacher_weight": 0.0, "model.keyframes.offset_evidence": False,  # the paper's loss alone
-    "model.keyframes.discovery": "offsets",  # the argmax offsets
+    "dataset.max_offset": 10, "dataset.n_cond": 5, "dataset.n_future": 30,
 }
 
 

@@ -15,9 +15,10 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Hashable, Iterable, Sequence
+from typing import Any, Callable, Hashable, Iterable, Mapping, Sequence
 
 import numpy as np
+from omegaconf import OmegaConf
 
 from keyin import RENAMED_SINCE_0_1
 
@@ -31,6 +32,21 @@ PAPER_ROWS = ("random", "constant", "static", "jumpy", "surprise", "keyin_paper"
 PAPER_METHOD = "keyin_paper"  # the paper's KEYIN; rows named keyin_paper_<choice> change the choice their name gives
 STATED_ROWS = "keyin_paper_stated"  # rows running every choice the paper states, the budget in their name (docs/decisions.md)
 STATED_RUN = {"backbone": "paper", "scale": "paper"}  # the frame model and sizes the paper states (metrics.json's keys)
+STATED_CHOICES = {  # what backbone=paper scale=paper compose for model=keyin on every dataset, as the paper states it
+    "model.keyframes.lstm_hidden": 256, "model.keyframes.lstm_layers": 2,  # "a simple two-layer LSTM with a
+    "model.interpolator.lstm_hidden": 256, "model.interpolator.lstm_layers": 2,  # 256-dimensional state ... for all"
+    "model.interpolator.mlp_hidden": 256,
+    "model.keyframes.lr": 2e-4, "model.interpolator.lr": 2e-4,  # "a learning rate of 2e-4"
+    "scale.batch_size": 30, "scale.stage1_batch_size": 30,  # "batch size of 30"
+    "model.interpolator.kl_weight": 1e-3,  # "The KL-divergence term for the interpolator VAE is 10^-3"
+    "model.keyframes.beta_ke": 1.0, "model.keyframes.beta_ki": 0.0, "model.keyframes.beta_kl": 0.05,
+    "model.keyframes.frozen": "lstm_inter",  # "we freeze LSTM_inter weights"
+    "model.keyframes.delta_input": "argmax",  # Init_inter = MLP(K^e,t-1, K^e,t, δ̂^t), δ̂ = argmax δ
+    "model.keyframes.n_keyframes": 6,
+    "model.interpolator.foreground_weight": 1.0,  # "sigmoid and ... BCE loss": the plain BCE
+    "model.keyframes.teacher_weight": 0.0, "model.keyframes.offset_evidence": False,  # the paper's loss alone
+    "model.keyframes.discovery": "offsets",  # the argmax offsets
+}  # (docs/decisions.md, "The paper's stated configuration"; tests/test_configs.py adds the dataset's own: Brownian's segments)
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
     "f1_interior", "f1_with_ends", "f1", "f1_tol1_interior", "f1_tol1", "f1_tol2_interior", "f1_tol2", "precision", "recall",
@@ -96,25 +112,39 @@ def collect_metrics(root: Roots) -> list[dict[str, Any]]:
             raise ValueError(f"{folder / 'metrics.json'} lacks {', '.join(missing)}: not a keyin metrics.json")
         common = {key: metrics.get(key) for key in ("dataset", "seed", "scale")}
         common.update(seed=metrics.get("seed", 0), path=str(folder))
-        records.append({**metrics, **common, "method": row_name(metrics["method"], metrics), "saved_as": metrics["method"]})
+        config = job_config(folder) if str(metrics["method"]).startswith(PAPER_METHOD) else None
+        records.append({**metrics, **common, "method": row_name(metrics["method"], metrics, config),
+                        "saved_as": metrics["method"]})
         for name, scores in metrics.get("variants", {}).items():
-            records.append({**scores, **common, "method": row_name(name, metrics), "saved_as": name})
+            records.append({**scores, **common, "method": row_name(name, metrics, config), "saved_as": name})
     return records
 
 
-def row_name(name: str, metrics: dict[str, Any]) -> str:
-    """The row of a method or variant ``name`` of the job whose ``metrics`` these are: a keyin 0.1 name (no
-    ``keyin_version``) in today's names (:func:`current_name`), then :func:`named_as_run`."""
-    return named_as_run(name if "keyin_version" in metrics else current_name(name), metrics)
+def job_config(folder: Path) -> Mapping[str, Any] | None:
+    """A job's composed config: ``config.yaml`` in a committed job folder, ``.hydra/config.yaml`` in a run dir; None
+    where it has neither."""
+    path = next((p for p in (folder / "config.yaml", folder / ".hydra" / "config.yaml") if p.is_file()), None)
+    return None if path is None else OmegaConf.load(path)
 
 
-def named_as_run(method: str, metrics: dict[str, Any]) -> str:
+def row_name(name: str, metrics: dict[str, Any], config: Mapping[str, Any] | None = None) -> str:
+    """The row of a method or variant ``name`` of the job whose ``metrics`` (and composed ``config``) these are: a
+    keyin 0.1 name (no ``keyin_version``) in today's names (:func:`current_name`), then :func:`named_as_run`."""
+    return named_as_run(name if "keyin_version" in metrics else current_name(name), metrics, config)
+
+
+def named_as_run(method: str, metrics: dict[str, Any], config: Mapping[str, Any] | None = None) -> str:
     """The row name of a job of the paper's method (``keyin_paper``, ``keyin_paper_<choice>``) that changed the frame
     model or sizes the paper states names them, as the overrides that ran it: ``keyin_paper · backbone=ours scale=cpu``;
-    so a row named plain ``keyin_paper`` ran the stated ones (issue 62). Other methods keep their names."""
+    on the stated frame model and sizes, any other stated value its ``config`` changed (:data:`STATED_CHOICES`):
+    ``keyin_paper · model.keyframes.lr=0.001``. So a row named plain ``keyin_paper`` ran the stated ones (issue 62), as
+    far as its job's files say. Other methods keep their names."""
     if not method.startswith(PAPER_METHOD):
         return method
     changed = [f"{key}={metrics[key]}" for key, stated in STATED_RUN.items() if metrics.get(key) not in (None, stated)]
+    if not changed and config is not None:  # a key the job's config lacks or cannot resolve is not known changed
+        changed = [f"{key}={value}" for key, stated in STATED_CHOICES.items() if (value := OmegaConf.select(
+            config, key, default=None, throw_on_resolution_failure=False)) not in (None, stated)]
     return f"{method} · {' '.join(changed)}" if changed else method
 
 

@@ -3,10 +3,11 @@
 import json
 
 import pytest
+from omegaconf import OmegaConf
 
 from keyin.cli import report
 from keyin.eval.report import (
-    collect_metrics, csv_table, markdown_table, method_sort_key, ranking_changes, row_source, summarise,
+    collect_metrics, csv_table, markdown_table, method_sort_key, named_as_run, ranking_changes, row_source, summarise,
 )
 
 
@@ -135,6 +136,25 @@ def test_a_row_of_the_papers_keyin_names_the_frame_model_and_sizes_it_changed(tm
     }
     assert {row.paper_f1 for row in rows.values()} == {0.84}  # the paper's KEYIN figure beside each
     assert "| brownian | keyin_paper · backbone=ours scale=cpu | changed | 0.150 ± 0.000 |" in markdown_table(list(rows.values()))
+
+
+def test_a_row_on_the_stated_frame_model_names_any_other_stated_value_its_job_config_changed(tmp_path):
+    stated = dict(backbone="paper", scale="paper")
+    as_stated = {"model": {"keyframes": {"lr": 2e-4, "frozen": "lstm_inter", "delta_input": "argmax"}},
+                 "scale": {"batch_size": 30}}
+    changed = {"model": {"keyframes": {"lr": 1e-3, "frozen": "lstm_inter", "delta_input": "soft"}},
+               "scale": {"batch_size": 30}}
+    for name, config, where in (("stated", as_stated, "config.yaml"), ("changed", changed, ".hydra/config.yaml"),
+                                ("unknown", None, None)):  # committed job folder, run dir, no config
+        write_job(tmp_path, f"{name}_seed0", "keyin_paper", {"stated": 0, "changed": 1, "unknown": 2}[name], 0.3, **stated)
+        if config is not None:
+            (tmp_path / f"{name}_seed0" / where).parent.mkdir(exist_ok=True)
+            (tmp_path / f"{name}_seed0" / where).write_text(OmegaConf.to_yaml(OmegaConf.create(config)))
+    names = sorted({record["method"] for record in collect_metrics(tmp_path)})
+    assert names == ["keyin_paper", "keyin_paper · model.keyframes.lr=0.001 model.keyframes.delta_input=soft"]
+    assert row_source(names[1]) == "changed"
+    lost = {"model": {"keyframes": {"lr": "${oops.lr}"}}}  # a key its config cannot resolve is not known changed
+    assert named_as_run("keyin_paper", stated, OmegaConf.create(lost)) == "keyin_paper"
 
 
 def test_a_renamed_row_draws_the_predictions_its_job_saved_under_its_own_name(tmp_path):
