@@ -4,8 +4,8 @@
 set -eu
 W=docs/results/warm_start_brownian
 python studies/warm_start_curves.py \
-  "the paper's loss=$W/arms.json:sampled" "the paper's loss=$W/arms_seed1.json:sampled" \
-  "the paper's loss=$W/arms_seed2.json:sampled" \
-  "interpolator reads K̃^e(δ)=$W/arms2.json:tied_interpolator" "interpolator reads K̃^e(δ)=$W/arms_seed1.json:tied_interpolator" \
-  "interpolator reads K̃^e(δ)=$W/arms_seed2.json:tied_interpolator" \
+  "the paper's loss=$W/arms.json:sampled" "the paper's loss=$W/arms_seed1_500.json:sampled" \
+  "the paper's loss=$W/arms_seed2_500.json:sampled" \
+  "interpolator reads K̃^e(δ)=$W/arms2.json:tied_interpolator" "interpolator reads K̃^e(δ)=$W/arms_seed1_500.json:tied_interpolator" \
+  "interpolator reads K̃^e(δ)=$W/arms_seed2_500.json:tied_interpolator" \
   "expected BCE=$W/arms2.json:expected" "β_ke = 100=$W/arms2.json:beta_ke100" --out $W/curves.png
