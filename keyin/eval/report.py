@@ -21,6 +21,7 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from keyin import RENAMED_SINCE_0_1
+from keyin.decode.registry import Offsets
 
 # Paper Table 1 (keyframe F1; paper §4.1.2). Jumpy is not in it (its keyframes are Constant's).
 # KEYIN's figure stands beside the paper's method (keyin_paper) and beside ours (keyin_plus).
@@ -45,7 +46,7 @@ STATED_CHOICES = {  # what backbone=paper scale=paper compose for model=keyin on
     "model.keyframes.n_keyframes": 6,
     "model.interpolator.foreground_weight": 1.0,  # "sigmoid and ... BCE loss": the plain BCE
     "model.keyframes.teacher_weight": 0.0, "model.keyframes.offset_evidence": False,  # the paper's loss alone
-    "model.keyframes.discovery": "offsets",  # the argmax offsets
+    "model.keyframes.discovery": Offsets.name,  # the argmax offsets
 }  # (docs/decisions.md, "The paper's stated configuration"; tests/test_configs.py adds the dataset's own: Brownian's segments)
 METHOD_ORDER = ("random", "constant", "static", "jumpy", "surprise", "keyin")
 SCORES = (
