@@ -10,6 +10,8 @@ import pytest
 import torch
 from lightning.pytorch.callbacks import ModelCheckpoint
 
+from tests.lit.test_fit_stage import Line, Numbers  # a one-weight module and its data
+
 SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "keyin_paper_stated" / "scripts" / "carry.py"
 spec = importlib.util.spec_from_file_location("carry", SCRIPT)
 carry = importlib.util.module_from_spec(spec)
@@ -193,21 +195,9 @@ def test_extend_goes_on_from_the_finished_job_under_the_longer_rows_name_and_nev
     assert torch.load(target, weights_only=False) == {"global_step": 6500}
 
 
-class Line(L.LightningModule):
-    def __init__(self) -> None:
-        super().__init__()
-        self.weight = torch.nn.Parameter(torch.zeros(1))
-
-    def training_step(self, batch: list[torch.Tensor], batch_idx: int) -> torch.Tensor:
-        return ((self.weight - batch[0]) ** 2).mean()
-
-    def configure_optimizers(self) -> torch.optim.Optimizer:
-        return torch.optim.Adam(self.parameters(), lr=0.1)
-
-
 def fit_line(folder: Path, steps: int, resume: Path | None = None) -> None:
     """Lightning's own ``last.ckpt`` every 2 steps (its version counter on, as in the commits the jobs run)."""
-    data = torch.utils.data.DataLoader(torch.utils.data.TensorDataset(torch.arange(40.0)[:, None]), batch_size=4)
+    data = torch.utils.data.DataLoader(Numbers(), batch_size=4)
     checkpoints = ModelCheckpoint(dirpath=folder, save_last=True, save_top_k=0, every_n_train_steps=2)
     trainer = L.Trainer(max_steps=steps, callbacks=[checkpoints], logger=False, enable_progress_bar=False,
                         enable_model_summary=False, accelerator="cpu")
