@@ -6,3 +6,7 @@ __version__ = "0.2.0"
 # additions) is `keyin_plus`; `keyin` is now the paper's method. Read where a checkpoint or a
 # metrics.json carries no keyin_version.
 RENAMED_SINCE_0_1 = {"keyin": "keyin_plus"}
+
+# The entry of the run config every keyin-train checkpoint stores (keyin.checkpoints.CONFIG_KEY) that names the run's
+# config-group choices (``{"backbone": "ours", "scale": "cpu", ...}``; since 0.2): what the values alone do not name.
+CHOICES_KEY = "choices"

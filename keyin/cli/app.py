@@ -224,6 +224,13 @@ def config_choice(group: str) -> str | None:
     return HydraConfig.get().runtime.choices.get(group)
 
 
+def config_choices() -> dict[str, str]:
+    """The option chosen for every config group of the current job but Hydra's own (``{"backbone": "ours",
+    "scale": "cpu", ...}``): what a config's values alone do not name."""
+    choices = HydraConfig.get().runtime.choices.items()
+    return {group: choice for group, choice in choices if choice is not None and not group.startswith("hydra")}
+
+
 def finished_metrics(folder: Path) -> dict[str, Any] | None:
     """A finished job's ``metrics.json`` (printed as its last line, as the job did), or None if it has none."""
     finished = Path(folder) / "metrics.json"

@@ -15,7 +15,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 from keyin.cli.app import keyin_main, run_dir, user_errors, write_metrics
 from keyin.cli.checks import check_common, require_positive_int
 from keyin.errors import ConfigError, DatasetFormatError
-from keyin.io import sha256_of
+from keyin.io import atomic_write_text, sha256_of
 from keyin.planning.journal import claim_run_dir
 from keyin.pretrained import resolve
 
@@ -82,7 +82,9 @@ def plan(cfg: DictConfig) -> dict:
     import numpy as np
     from hydra.utils import instantiate
 
-    from keyin.eval.planning import planning_summary
+    from keyin.checkpoints import load_checkpoint
+    from keyin.eval.planning import MODEL_CONFIG, planning_summary
+    from keyin.lit.registry import run_config
     from keyin.planning.runner import PlanJob, run_tasks
     from keyin.planning.servo import ServoParams
     from keyin.planning.tasks import read_tasks, task_generator
@@ -102,6 +104,9 @@ def plan(cfg: DictConfig) -> dict:
         "task_files": {path.name: sha256_of(path) for path in files},
         **({"checkpoint_sha256": sha256_of(resolve(checkpoint))} if checkpoint else {}),  # resuming refuses a retrained one
     })
+    if checkpoint:  # the run config of the model planned with (keyin-report names a row of the paper's method after it)
+        model_config = OmegaConf.create(run_config(load_checkpoint(resolve(checkpoint))))
+        atomic_write_text(folder / MODEL_CONFIG, OmegaConf.to_yaml(model_config))
     job = PlanJob(
         planner=cfg.planner.name,
         controller=controller,

@@ -15,7 +15,8 @@ from lightning.pytorch.loggers import Logger
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from keyin.cli.app import config_choice, write_metrics
+from keyin import CHOICES_KEY
+from keyin.cli.app import config_choice, config_choices, write_metrics
 from keyin.cli.checks import is_two_stage
 from keyin.cli.tracking import job_logger, log_config, log_results, namespace
 from keyin.data.datamodule import ClipDataModule, split_clips
@@ -103,7 +104,7 @@ def fit_and_score(cfg: DictConfig, folder: Path, logger: Logger | bool) -> dict 
         checkpoint_every=scale.checkpoint_every,
         trainer_kwargs=OmegaConf.to_container(cfg.trainer),
         logger=logger,
-        config=OmegaConf.to_container(cfg, resolve=True),
+        config={**OmegaConf.to_container(cfg, resolve=True), CHOICES_KEY: config_choices()},  # travels in each checkpoint
         compile_networks=cfg.compile,
     )
     module, train_seconds = None, 0.0

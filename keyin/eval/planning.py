@@ -13,6 +13,9 @@ from keyin.envs.geometry import shortest_path_length, to_wall_frame
 
 # How a task ended (:func:`episode_outcome`), in the order they are tested.
 OUTCOMES = ("success", "untouched", "reached_then_lost", "not_crossed", "crossed_missed")
+# In a planning job's run dir beside tasks.jsonl: the run config stored in the checkpoint of the model it planned with
+# (keyin-plan writes it; keyin-report names a row of the paper's method after that model's frame model and sizes).
+MODEL_CONFIG = "model_config.yaml"
 UNTOUCHED_BELOW = 0.05  # world units: a puck that never left this disc round its start was not pushed
 
 

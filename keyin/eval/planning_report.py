@@ -16,9 +16,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from omegaconf import DictConfig, OmegaConf
 
-from keyin.eval.planning import OUTCOMES, bootstrap_interval, planning_summary, success_curve
-from keyin.eval.report import Roots, group_by_seed, is_planning, read_metrics
+from keyin.eval.planning import MODEL_CONFIG, OUTCOMES, bootstrap_interval, planning_summary, success_curve
+from keyin.eval.report import Roots, group_by_seed, is_planning, method_of, model_run, named_as_run, read_metrics
 from keyin.io import read_json_lines
 
 # Paper Table 2 (paper §4.2): position error mean, std and success rate in % (None: "-"). A learned
@@ -48,7 +49,8 @@ class PlanningRow:
 
     Attributes:
         planner: the row's name: ``base``, followed by its ``setting`` unless the default.
-        base: the planner's name (``metrics.json``'s ``planner``).
+        base: the planner's name (``metrics.json``'s ``planner``), followed by what its model changed of the paper's
+            stated choices where it is the paper's method (:func:`named_planner`).
         setting: :func:`servo_setting` of its jobs.
         model_seed: the one model seed its jobs planned with under their own planning seeds, or
             None where each seed planned with its own model (:func:`fixed_model_seed`).
@@ -81,9 +83,17 @@ class PlanningRow:
     outcomes: dict[str, int]
 
 
+def named_planner(planner: str, model_config: DictConfig | None) -> str:
+    """A planner's name in the table: one of the paper's method (``keyin_paper``) that planned with a model of another
+    frame model, sizes or stated value than the paper's names them, as Table 1 names that model's row
+    (:func:`keyin.eval.report.named_as_run`: ``keyin_paper · backbone=ours scale=cpu``), from the run config of the model
+    (``model_config``, the job's :data:`~keyin.eval.planning.MODEL_CONFIG`; None: not recorded). Others keep their name."""
+    return planner if model_config is None else named_as_run(planner, model_run(model_config), model_config)
+
+
 def collect_planning(root: Roots) -> list[dict[str, Any]]:
     """Every planning job under ``root`` (one sweep folder or several): its metrics plus ``tasks``, the records of the ``n_tasks``
-    tasks it reported (the first ones of the split), and ``path``.
+    tasks it reported (the first ones of the split), ``named`` (:func:`named_planner`) and ``path``.
 
     Raises:
         ValueError: a job whose tasks.jsonl holds fewer tasks than its metrics.json counts.
@@ -99,7 +109,9 @@ def collect_planning(root: Roots) -> list[dict[str, Any]]:
                 f"{folder / 'tasks.jsonl'} holds {len(tasks)} tasks but its metrics.json counts "
                 f"{metrics['n_tasks']}; run the job again to rebuild it"
             )
-        jobs.append({**metrics, "seed": metrics.get("seed", 0), "tasks": tasks, "path": str(folder)})
+        model_config = OmegaConf.load(folder / MODEL_CONFIG) if (folder / MODEL_CONFIG).is_file() else None
+        named = named_planner(metrics["planner"], model_config)
+        jobs.append({**metrics, "seed": metrics.get("seed", 0), "tasks": tasks, "named": named, "path": str(folder)})
     return jobs
 
 
@@ -116,8 +128,9 @@ def sweep_threshold(jobs: list[dict[str, Any]]) -> float:
 
 
 def planner_sort_key(planner: str) -> tuple[int, str]:
-    """Table order: the paper's rows, then the oracle, then anything else."""
-    return (PLANNER_ORDER.index(planner) if planner in PLANNER_ORDER else len(PLANNER_ORDER), planner)
+    """Table order: the paper's rows, then the oracle, then anything else (by the planner a row name starts with)."""
+    method = method_of(planner)
+    return (PLANNER_ORDER.index(method) if method in PLANNER_ORDER else len(PLANNER_ORDER), planner)
 
 
 def servo_setting(job: dict[str, Any]) -> str:
@@ -172,7 +185,7 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
         ValueError: if a (planner, setting, seed) appears twice (two sweeps under one root).
     """
     def key_of(job: dict[str, Any]) -> tuple[str, str, int | None]:
-        return job["planner"], servo_setting(job), fixed_model_seed(job)
+        return job["named"], servo_setting(job), fixed_model_seed(job)
 
     groups = group_by_seed(jobs, key_of, lambda job: f"planner {row_name(*key_of(job))}")
     rows = []
@@ -200,7 +213,7 @@ def summarise_planning(jobs: list[dict[str, Any]], threshold: float) -> list[Pla
                 ],
                 seconds_per_task=float(np.mean([task["seconds"] for task in tasks])),
                 machines={seed: machine_name(job) for seed, job in sorted(groups[key].items())},
-                paper=PAPER_TABLE2.get(planner),
+                paper=PAPER_TABLE2.get(method_of(planner)),
                 outcomes=dict(Counter(task.get("outcome", NOT_RECORDED) for task in tasks)),
             )
         )
@@ -241,17 +254,22 @@ DIFFERENCE_PAIRS = (
 
 
 def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[tuple[str, str], ...] = DIFFERENCE_PAIRS) -> str:
-    """One line per pair of planners (KEYIN − Jumpy, ours − the paper's, the baselines' order) that are both in ``rows``:
-    the success difference in points with its paired interval; empty if none is."""
-    by_name = {row.planner: row for row in rows}
+    """One line per pair of planners (KEYIN − Jumpy, ours − the paper's, the baselines' order) that are both in ``rows``
+    in the default servo setting, each model seed its own (a row named after what its model changed stands for its
+    planner, :func:`named_planner`): the success difference in points with its paired interval; empty if none is."""
+    by_planner: dict[str, list[PlanningRow]] = {}
+    for row in rows:
+        if row.setting == DEFAULT_SETTING and row.model_seed is None:
+            by_planner.setdefault(method_of(row.base), []).append(row)
     lines = []
     for first, second in pairs:
-        if first in by_name and second in by_name:
-            d = paired_success_difference(by_name[first], by_name[second], threshold)
-            lines.append(
-                f"- {first} − {second} success: {100 * d['difference']:+.1f} points, 95 % paired bootstrap interval "
-                f"[{100 * d['low']:+.1f}, {100 * d['high']:+.1f}] over {d['n_tasks']} common tasks"
-            )
+        for one in by_planner.get(first, []):
+            for other in by_planner.get(second, []):
+                d = paired_success_difference(one, other, threshold)
+                lines.append(
+                    f"- {one.planner} − {other.planner} success: {100 * d['difference']:+.1f} points, 95 % paired "
+                    f"bootstrap interval [{100 * d['low']:+.1f}, {100 * d['high']:+.1f}] over {d['n_tasks']} common tasks"
+                )
     return "\n".join(lines) + ("\n" if lines else "")
 
 

@@ -20,7 +20,7 @@ from typing import Any, Callable, Hashable, Iterable, Mapping, Sequence
 import numpy as np
 from omegaconf import OmegaConf
 
-from keyin import RENAMED_SINCE_0_1
+from keyin import CHOICES_KEY, RENAMED_SINCE_0_1
 from keyin.decode.registry import Offsets
 
 # Paper Table 1 (keyframe F1; paper §4.1.2). Jumpy is not in it (its keyframes are Constant's).
@@ -147,6 +147,19 @@ def named_as_run(method: str, metrics: dict[str, Any], config: Mapping[str, Any]
         changed = [f"{key}={value}" for key, stated in STATED_CHOICES.items() if (value := OmegaConf.select(
             config, key, default=None, throw_on_resolution_failure=False)) not in (None, stated)]
     return f"{method} · {' '.join(changed)}" if changed else method
+
+
+def model_run(config: Mapping[str, Any]) -> dict[str, Any]:
+    """A model's frame model and sizes as a job's metrics.json records them (``backbone``, ``scale``), from the run
+    config stored in its checkpoint: the config-group choices keyin-train records there (since 0.2), else the frame
+    model's name alone (a size then shows as the stated value it changed, :func:`named_as_run`)."""
+    choices = config.get(CHOICES_KEY) or {}
+    return {"backbone": choices.get("backbone", (config.get("backbone") or {}).get("name")), "scale": choices.get("scale")}
+
+
+def method_of(row: str) -> str:
+    """The method a row name starts with: ``keyin_paper`` of ``keyin_paper · backbone=ours scale=cpu``."""
+    return row.split(" · ")[0]
 
 
 def current_name(method: str) -> str:

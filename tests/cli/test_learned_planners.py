@@ -6,6 +6,7 @@ import json
 import pytest
 import torch
 from hydra import compose, initialize_config_module
+from omegaconf import OmegaConf
 
 from keyin.cli.app import CONFIG_MODULE
 from keyin.pretrained import registry
@@ -43,6 +44,9 @@ def test_keyin_plans_its_keyframes_as_subgoals(root):
     assert record["planner"] == "keyin_plus" and record["steps"] == 3 and record["subgoals"] == 6 + 1  # K^1..K^6, goal
     assert 0 <= record["plan_samples_without_puck"] <= 8 and 0 <= record["plan_cost_px"] <= 64 * 2**0.5
     assert len(json.loads((root / "keyin" / "plan.json").read_text())["checkpoint_sha256"]) == 64
+    model = OmegaConf.load(root / "keyin" / "model_config.yaml")  # the model planned with: keyin-report names a row by it
+    assert model.model.name == "keyin_plus" and (model.choices.scale, model.choices.dataset) == ("smoke", "pushing")
+    assert model.choices.backbone == model.backbone.name and "hydra/launcher" not in model.choices
 
 
 def test_a_shipped_model_plans_by_its_name_and_its_hash_is_recorded(root):
@@ -51,6 +55,8 @@ def test_a_shipped_model_plans_by_its_name_and_its_hash_is_recorded(root):
     assert last_json(result.stdout)["n_tasks"] == 1
     shipped = registry()["pushing"]["sha256"]
     assert json.loads((root / "shipped" / "plan.json").read_text())["checkpoint_sha256"] == shipped
+    model = OmegaConf.load(root / "shipped" / "model_config.yaml")  # trained before keyin-train recorded its choices
+    assert model.model.name == "keyin_plus" and model.backbone.name == "ours" and "choices" not in model
 
 
 def test_resuming_with_a_retrained_checkpoint_is_refused(root):

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from keyin.cli import report
 from keyin.eval.planning import bootstrap_interval, planning_summary, success_curve
@@ -21,7 +22,8 @@ from keyin.eval.planning_report import (
 )
 
 
-def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, machine=None, **setting):
+def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, machine=None, model_config=None,
+              **setting):
     job = root / f"{planner}_seed{seed}{''.join(f'_{value}' for value in setting.values())}"
     job.mkdir(parents=True)
     records = [dict(task=i, planner=planner, seed=seed, final_error=e, initial_distance=1.25, steps=10, subgoals=1,
@@ -34,6 +36,8 @@ def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outco
     if machine is not None:
         metrics["machine"] = machine
     (job / "metrics.json").write_text(json.dumps(metrics))
+    if model_config is not None:
+        (job / "model_config.yaml").write_text(OmegaConf.to_yaml(model_config))
 
 
 @pytest.fixture
@@ -208,3 +212,26 @@ def test_one_model_under_other_planning_seeds_is_its_own_row_and_not_a_servo_set
     assert rows[2].seeds == [1, 2] and rows[2].seed_success == [0.75, 0.75] and rows[0].seed_success == [1.0, 0.5]
     header, _, line = sensitivity_markdown(rows, 0.66).splitlines()
     assert "model seed" not in header and line.endswith("| 2 |")  # seed 0's tasks 0 and 1 in both servo settings
+
+
+def test_a_row_of_the_papers_method_names_what_its_model_changed_beside_the_papers_figures(tmp_path):
+    ours = {"choices": {"backbone": "ours", "scale": "cpu"}, "backbone": {"name": "ours"}, "model": {"name": "keyin_paper"}}
+    stated = {"choices": {"backbone": "paper", "scale": "paper"}, "model": {"keyframes": {"lr": 2e-4}}}
+    before_choices = {"backbone": {"name": "paper"}, "model": {"keyframes": {"lr": 1e-3}}}  # a checkpoint of before 0.2
+    write_job(tmp_path / "ours", "keyin_paper", 0, [0.1, 1.0, 0.1, 0.1], model_config=ours)
+    write_job(tmp_path / "ours", "keyin_paper", 1, [0.1, 1.0, 1.0, 0.1], model_config=ours)
+    write_job(tmp_path / "stated", "keyin_paper", 0, [0.1, 0.1, 0.1, 0.1], model_config=stated)
+    write_job(tmp_path / "older", "keyin_paper", 0, [1.0, 1.0, 1.0, 0.1], model_config=before_choices)
+    write_job(tmp_path / "ours", "jumpy", 0, [1.0, 1.0, 0.1, 0.1], model_config=dict(ours, model={"name": "jumpy"}))
+    write_job(tmp_path / "ours", "keyin_paper", 0, [0.1, 1.0], servo_observe="pixels", model_config=ours)
+    write_job(tmp_path / "plain", "no_subgoals", 0, [1.0, 1.0, 1.0, 1.0])  # plans with no model
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)
+    assert [row.planner for row in rows] == [
+        "no_subgoals", "jumpy", "keyin_paper", "keyin_paper · backbone=ours scale=cpu",
+        "keyin_paper · model.keyframes.lr=0.001", "keyin_paper · backbone=ours scale=cpu · pixels · servo steps"]
+    assert [row.seeds for row in rows[2:5]] == [[0], [0, 1], [0]]
+    assert {row.paper for row in rows[2:]} == {(0.50, 0.26, 64.2)} and rows[1].paper == (0.62, 0.33, 58.8)
+    lines = difference_markdown(rows, 0.66).splitlines()  # each keyin_paper row against Jumpy, seed 0's tasks shared
+    assert [line.split(" success:")[0] for line in lines] == [
+        "- keyin_paper − jumpy", "- keyin_paper · backbone=ours scale=cpu − jumpy", "- keyin_paper · model.keyframes.lr=0.001 − jumpy"]
+    assert lines[0].startswith("- keyin_paper − jumpy success: +50.0 points") and "over 4 common tasks" in lines[1]
