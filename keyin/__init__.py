@@ -7,6 +7,9 @@ __version__ = "0.2.0"
 # metrics.json carries no keyin_version.
 RENAMED_SINCE_0_1 = {"keyin": "keyin_plus"}
 
+# The Hydra configs (conf/) ship inside the package as this module, so an installed keyin needs no source tree.
+CONFIG_MODULE = "keyin.conf"
+
 # The entry of the run config every keyin-train checkpoint stores (keyin.checkpoints.CONFIG_KEY) that names the run's
 # config-group choices (``{"backbone": "ours", "scale": "cpu", ...}``; since 0.2): what the values alone do not name.
 CHOICES_KEY = "choices"

@@ -22,13 +22,10 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import ConfigAttributeError, ConfigKeyError
 
 import keyin.cli.naming  # noqa: F401  (registers the logger configs' resolvers)
-from keyin import __version__
+from keyin import CONFIG_MODULE, __version__
 from keyin.cli.checks import moved_key_message
 from keyin.errors import KeyinError
 from keyin.io import atomic_write_text
-
-# The configs ship inside the package (conf), so an installed keyin needs no source tree.
-CONFIG_MODULE = "keyin.conf"
 
 # ${keyin.default:value,fallback}: the fallback when value is null (resume= picks the run dir).
 OmegaConf.register_new_resolver(

@@ -16,10 +16,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
 
 from keyin.eval.planning import MODEL_CONFIG, OUTCOMES, bootstrap_interval, planning_summary, success_curve
-from keyin.eval.report import Roots, group_by_seed, is_planning, method_of, model_run, named_as_run, read_metrics
+from keyin.eval.report import (
+    PAPER_METHOD, Roots, group_by_seed, is_planning, method_of, model_run, named_as_run, read_metrics,
+)
 from keyin.io import read_json_lines
 
 # Paper Table 2 (paper §4.2): position error mean, std and success rate in % (None: "-"). A learned
@@ -41,6 +45,7 @@ PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
 SERVO_DEFAULTS = {"servo_observe": "state", "servo_action_repeat": 2, "servo_horizon": 8}
 CURVE_END = 1.6  # world units: the success curves reach at least this threshold (past the initial distances)
 NOT_RECORDED = "not recorded"
+MODEL_NOT_RECORDED = "model not recorded"  # a row of the paper's method whose jobs hold no model config (keyin-plan before 0.2)
 
 
 @dataclass
@@ -84,11 +89,33 @@ class PlanningRow:
 
 
 def named_planner(planner: str, model_config: DictConfig | None) -> str:
-    """A planner's name in the table: one of the paper's method (``keyin_paper``) that planned with a model of another
-    frame model, sizes or stated value than the paper's names them, as Table 1 names that model's row
-    (:func:`keyin.eval.report.named_as_run`: ``keyin_paper · backbone=ours scale=cpu``), from the run config of the model
-    (``model_config``, the job's :data:`~keyin.eval.planning.MODEL_CONFIG`; None: not recorded). Others keep their name."""
-    return planner if model_config is None else named_as_run(planner, model_run(model_config), model_config)
+    """A planner's name in the table: one of the paper's method (``keyin_paper``) names what the model it planned with
+    changed of the paper's stated choices, as Table 1 names that model's row (:func:`keyin.eval.report.named_as_run`:
+    ``keyin_paper · backbone=ours scale=cpu``), from the model's run config (``model_config``, the job's
+    :data:`~keyin.eval.planning.MODEL_CONFIG`), or says it is not recorded (None). Others keep their name."""
+    if not planner.startswith(PAPER_METHOD):
+        return planner
+    if model_config is None:
+        return f"{planner} · {MODEL_NOT_RECORDED}"
+    return named_as_run(planner, model_run(model_config), model_config)
+
+
+def read_model_config(folder: Path) -> DictConfig | None:
+    """A planning job's :data:`~keyin.eval.planning.MODEL_CONFIG`, None where it has none.
+
+    Raises:
+        ValueError: a file that is not a YAML mapping of a run config.
+    """
+    path = folder / MODEL_CONFIG
+    if not path.is_file():
+        return None
+    try:
+        config = OmegaConf.load(path)
+    except (yaml.YAMLError, OmegaConfBaseException) as err:
+        raise ValueError(f"{path} is not YAML ({type(err).__name__}); plan the job again to rewrite it") from None
+    if not isinstance(config, DictConfig) or "model" not in config:
+        raise ValueError(f"{path} holds no run config (no `model` entry); plan the job again to rewrite it")
+    return config
 
 
 def collect_planning(root: Roots) -> list[dict[str, Any]]:
@@ -109,8 +136,7 @@ def collect_planning(root: Roots) -> list[dict[str, Any]]:
                 f"{folder / 'tasks.jsonl'} holds {len(tasks)} tasks but its metrics.json counts "
                 f"{metrics['n_tasks']}; run the job again to rebuild it"
             )
-        model_config = OmegaConf.load(folder / MODEL_CONFIG) if (folder / MODEL_CONFIG).is_file() else None
-        named = named_planner(metrics["planner"], model_config)
+        named = named_planner(metrics["planner"], read_model_config(folder))
         jobs.append({**metrics, "seed": metrics.get("seed", 0), "tasks": tasks, "named": named, "path": str(folder)})
     return jobs
 
@@ -256,7 +282,8 @@ DIFFERENCE_PAIRS = (
 def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[tuple[str, str], ...] = DIFFERENCE_PAIRS) -> str:
     """One line per pair of planners (KEYIN − Jumpy, ours − the paper's, the baselines' order) that are both in ``rows``
     in the default servo setting, each model seed its own (a row named after what its model changed stands for its
-    planner, :func:`named_planner`): the success difference in points with its paired interval; empty if none is."""
+    planner, :func:`named_planner`; two rows that share no task are not paired): the success difference in points
+    with its paired interval; empty if none is."""
     by_planner: dict[str, list[PlanningRow]] = {}
     for row in rows:
         if row.setting == DEFAULT_SETTING and row.model_seed is None:
@@ -265,6 +292,8 @@ def difference_markdown(rows: list[PlanningRow], threshold: float, pairs: tuple[
     for first, second in pairs:
         for one in by_planner.get(first, []):
             for other in by_planner.get(second, []):
+                if not set(one.tasks) & set(other.tasks):
+                    continue
                 d = paired_success_difference(one, other, threshold)
                 lines.append(
                     f"- {one.planner} − {other.planner} success: {100 * d['difference']:+.1f} points, 95 % paired "

@@ -10,6 +10,7 @@ Every training or evaluation job writes ``metrics.json`` (method, dataset, seed,
 from __future__ import annotations
 
 import csv
+import importlib.resources
 import io
 import json
 import math
@@ -18,9 +19,9 @@ from pathlib import Path
 from typing import Any, Callable, Hashable, Iterable, Mapping, Sequence
 
 import numpy as np
-from omegaconf import OmegaConf
+from omegaconf import DictConfig, OmegaConf
 
-from keyin import CHOICES_KEY, RENAMED_SINCE_0_1
+from keyin import CHOICES_KEY, CONFIG_MODULE, RENAMED_SINCE_0_1
 from keyin.decode.registry import Offsets
 
 # Paper Table 1 (keyframe F1; paper §4.1.2). Jumpy is not in it (its keyframes are Constant's).
@@ -149,12 +150,36 @@ def named_as_run(method: str, metrics: dict[str, Any], config: Mapping[str, Any]
     return f"{method} · {' '.join(changed)}" if changed else method
 
 
-def model_run(config: Mapping[str, Any]) -> dict[str, Any]:
+def model_run(config: DictConfig) -> dict[str, Any]:
     """A model's frame model and sizes as a job's metrics.json records them (``backbone``, ``scale``), from the run
     config stored in its checkpoint: the config-group choices keyin-train records there (since 0.2), else the frame
-    model's name alone (a size then shows as the stated value it changed, :func:`named_as_run`)."""
-    choices = config.get(CHOICES_KEY) or {}
-    return {"backbone": choices.get("backbone", (config.get("backbone") or {}).get("name")), "scale": choices.get("scale")}
+    model's name and the preset its sizes and budgets are (:func:`scale_preset`); None where neither says."""
+    def known(key: str) -> Any:
+        return OmegaConf.select(config, key, default=None, throw_on_resolution_failure=False)
+
+    scale = known("scale")
+    return {
+        "backbone": known(f"{CHOICES_KEY}.backbone") or known("backbone.name"),
+        "scale": known(f"{CHOICES_KEY}.scale") or (scale_preset(scale, known("dataset.name")) if scale else None),
+    }
+
+
+def scale_preset(scale: DictConfig, dataset: str | None) -> str | None:
+    """The ``scale=`` preset whose every size and budget a run config's ``scale`` holds, with the dataset's own values
+    merged over it as keyin-train composes them (``conf/scale_dataset/<preset>_<dataset>.yaml``); keys one side lacks
+    (added since) left out. None where no one preset matches (a value overridden on the command line, a preset changed
+    since): for a checkpoint written before keyin-train recorded its choices."""
+    conf = importlib.resources.files(CONFIG_MODULE)
+    matches = []
+    for file in sorted((conf / "scale").iterdir(), key=lambda file: file.name):
+        preset = file.name.removesuffix(".yaml")
+        values = OmegaConf.create(file.read_text(encoding="utf-8"))
+        if (per_dataset := conf / "scale_dataset" / f"{preset}_{dataset}.yaml").is_file():
+            values = OmegaConf.merge(values, OmegaConf.create(per_dataset.read_text(encoding="utf-8")))
+        values = OmegaConf.to_container(values, resolve=True)
+        if all(scale[key] == value for key, value in values.items() if key in scale):
+            matches.append(preset)
+    return matches[0] if len(matches) == 1 else None
 
 
 def method_of(row: str) -> str:

@@ -4,10 +4,12 @@ import json
 
 import numpy as np
 import pytest
+from hydra import compose, initialize_config_module
 from omegaconf import OmegaConf
 
 from keyin.cli import report
 from keyin.eval.planning import bootstrap_interval, planning_summary, success_curve
+from keyin.cli.app import CONFIG_MODULE
 from keyin.eval.planning_report import (
     collect_planning,
     difference_markdown,
@@ -17,9 +19,11 @@ from keyin.eval.planning_report import (
     planning_csv,
     planning_markdown,
     sensitivity_markdown,
+    named_planner,
     success_curves,
     summarise_planning,
 )
+from keyin.eval.report import model_run
 
 
 def write_job(root, planner, seed, errors, threshold=0.66, extra_lines="", outcomes=None, machine=None, model_config=None,
@@ -205,9 +209,10 @@ def test_one_model_under_other_planning_seeds_is_its_own_row_and_not_a_servo_set
     write_job(tmp_path / "noise", "keyin_paper", 1, [0.1, 0.1, 1.0, 0.1], model_seed=0)  # model 0, planning seed 1
     write_job(tmp_path / "noise", "keyin_paper", 2, [1.0, 0.1, 0.1, 0.1], model_seed=0)
     write_job(tmp_path, "keyin_paper", 0, [0.1, 1.0], servo_observe="pixels", servo_action_repeat=2, model_seed=0)
-    rows = summarise_planning(collect_planning(tmp_path), 0.66)
-    assert [row.planner for row in rows] == [
-        "keyin_paper", "keyin_paper · pixels · servo steps", "keyin_paper · model seed 0"]
+    rows = summarise_planning(collect_planning(tmp_path), 0.66)  # no job recorded its model's config
+    assert [row.planner for row in rows] == ["keyin_paper · model not recorded",
+                                             "keyin_paper · model not recorded · pixels · servo steps",
+                                             "keyin_paper · model not recorded · model seed 0"]
     assert [row.model_seed for row in rows] == [None, None, 0]
     assert rows[2].seeds == [1, 2] and rows[2].seed_success == [0.75, 0.75] and rows[0].seed_success == [1.0, 0.5]
     header, _, line = sensitivity_markdown(rows, 0.66).splitlines()
@@ -225,13 +230,43 @@ def test_a_row_of_the_papers_method_names_what_its_model_changed_beside_the_pape
     write_job(tmp_path / "ours", "jumpy", 0, [1.0, 1.0, 0.1, 0.1], model_config=dict(ours, model={"name": "jumpy"}))
     write_job(tmp_path / "ours", "keyin_paper", 0, [0.1, 1.0], servo_observe="pixels", model_config=ours)
     write_job(tmp_path / "plain", "no_subgoals", 0, [1.0, 1.0, 1.0, 1.0])  # plans with no model
+    write_job(tmp_path / "elsewhere", "keyin_paper", 2, [0.1, 0.1])  # seed 2: shares no (seed, task) with Jumpy's
     rows = summarise_planning(collect_planning(tmp_path), 0.66)
     assert [row.planner for row in rows] == [
         "no_subgoals", "jumpy", "keyin_paper", "keyin_paper · backbone=ours scale=cpu",
-        "keyin_paper · model.keyframes.lr=0.001", "keyin_paper · backbone=ours scale=cpu · pixels · servo steps"]
-    assert [row.seeds for row in rows[2:5]] == [[0], [0, 1], [0]]
+        "keyin_paper · model not recorded", "keyin_paper · model.keyframes.lr=0.001",
+        "keyin_paper · backbone=ours scale=cpu · pixels · servo steps"]
+    assert [row.seeds for row in rows[2:6]] == [[0], [0, 1], [2], [0]]
     assert {row.paper for row in rows[2:]} == {(0.50, 0.26, 64.2)} and rows[1].paper == (0.62, 0.33, 58.8)
-    lines = difference_markdown(rows, 0.66).splitlines()  # each keyin_paper row against Jumpy, seed 0's tasks shared
+    lines = difference_markdown(rows, 0.66).splitlines()  # each keyin_paper row against Jumpy where they share tasks
     assert [line.split(" success:")[0] for line in lines] == [
         "- keyin_paper − jumpy", "- keyin_paper · backbone=ours scale=cpu − jumpy", "- keyin_paper · model.keyframes.lr=0.001 − jumpy"]
     assert lines[0].startswith("- keyin_paper − jumpy success: +50.0 points") and "over 4 common tasks" in lines[1]
+
+
+def pushing_cpu_scale() -> dict:
+    """scale=cpu with dataset=pushing's own values, as keyin-train composes them."""
+    with initialize_config_module(config_module=CONFIG_MODULE, version_base="1.3"):
+        cfg = compose(config_name="train", overrides=["dataset=pushing", "scale=cpu"])
+    return OmegaConf.to_container(cfg.scale, resolve=True)
+
+
+def test_a_model_that_recorded_no_choices_is_named_by_the_preset_its_sizes_are():
+    scale = pushing_cpu_scale()
+    older = OmegaConf.create({"backbone": {"name": "ours"}, "dataset": {"name": "pushing"}, "scale": scale})
+    assert model_run(older) == {"backbone": "ours", "scale": "cpu"}
+    assert named_planner("keyin_paper", older) == "keyin_paper · backbone=ours scale=cpu"
+    brownian = OmegaConf.merge(older, {"dataset": {"name": "brownian"}})  # pushing's conv_width 8 is not Brownian's cpu
+    assert model_run(brownian)["scale"] is None
+    overridden = OmegaConf.merge(older, {"scale": {"lstm_hidden": 256}})  # scale.lstm_hidden=256: no preset
+    assert named_planner("keyin_paper", overridden) == "keyin_paper · backbone=ours"
+    assert named_planner("jumpy", overridden) == "jumpy" and named_planner("jumpy", None) == "jumpy"
+
+
+@pytest.mark.parametrize("text, problem", [("model: [unclosed", "is not YAML"), ("", "holds no run config"),
+                                           ("- a list\n", "holds no run config")])
+def test_a_broken_model_config_is_refused_naming_the_file(tmp_path, text, problem):
+    write_job(tmp_path, "keyin_paper", 0, [0.1])
+    (tmp_path / "keyin_paper_seed0" / "model_config.yaml").write_text(text)
+    with pytest.raises(ValueError, match=f"keyin_paper_seed0/model_config.yaml {problem}.*; plan the job again"):
+        collect_planning(tmp_path)
