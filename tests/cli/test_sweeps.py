@@ -88,7 +88,10 @@ def test_each_stage_keeps_its_best_and_last_checkpoint_and_metrics_name_the_best
         best = load_checkpoint(job / "checkpoints" / stage / "best.ckpt", stage)
         assert best["global_step"] == 2 and metrics["best"][stage]["step"] == 2  # validated at step 2 of 3
         assert metrics["best"][stage]["monitor"] == monitor
-        assert load_checkpoint(job / "checkpoints" / stage / "last.ckpt")["global_step"] == 3
+        last = load_checkpoint(job / "checkpoints" / stage / "last.ckpt")
+        assert last["global_step"] == 3
+        choices = last["keyin_config"]["choices"]  # each sweep job's own config-group choices travel with its model
+        assert (choices["model"], choices["scale"], choices["backbone"]) == ("keyin_plus", "smoke", "ours")
     assert (metrics["val_f1_best"], metrics["val_f1_best_step"]) == (metrics["best"]["keyframes"]["value"], 2)
     assert run_checkpoint(job / "best") == job / "checkpoints" / "keyframes" / "best.ckpt"  # keyin-eval, keyin-discover
     assert run_checkpoint(job / "last") == job / "checkpoints" / "keyframes" / "last.ckpt"
