@@ -1,5 +1,6 @@
 """Curves of the warm-start studies (studies/warm_start_arms.py) from their committed JSON: argmax-offset F1, keyframes
-per clip, distinct patterns among the validation clips, δ's entropy and L_inter against the step (issue 62 item 2).
+per clip, distinct patterns among the validation clips, δ's entropy, the paper's loss and its terms L_inter, L_ke and the
+keyframe KL against the step (issue 62 item 2; L_ki is off, β_ki = 0, so not drawn).
 
     python studies/warm_start_curves.py "paper's loss, seed 0=docs/results/warm_start_brownian/arms.json:sampled" ... \
         --out docs/results/warm_start_brownian/curves.png
@@ -20,7 +21,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 PANELS = {"f1": "argmax-offset F1", "keys": "keyframes per clip", "patterns": "distinct patterns", "entropy": "δ's entropy (nats)",
-          "inter": "L_inter (nats per clip)"}
+          "loss": "the loss (nats per clip)", "inter": "L_inter (nats per clip)", "key_emb": "L_ke (per clip)",
+          "kl": "keyframe KL (nats per clip)"}
+COLUMNS = 4
 
 
 def arm_rows(spec: str) -> list[dict]:
@@ -34,7 +37,9 @@ def arm_rows(spec: str) -> list[dict]:
 
 def draw(runs: list[tuple[str, list[dict]]], out: Path) -> None:
     """One panel per :data:`PANELS` entry, one line per run, the runs of a label in one colour."""
-    fig, axes = plt.subplots(1, len(PANELS), figsize=(3.6 * len(PANELS), 3.2))
+    rows_of_panels = -(-len(PANELS) // COLUMNS)
+    fig, axes = plt.subplots(rows_of_panels, COLUMNS, figsize=(3.6 * COLUMNS, 3.0 * rows_of_panels + 0.5))
+    axes = axes.ravel()
     colours: dict[str, str] = {}
     for label, rows in runs:
         colour = colours.setdefault(label, f"C{len(colours)}")
@@ -50,7 +55,7 @@ def draw(runs: list[tuple[str, list[dict]]], out: Path) -> None:
         axis.set_xlabel("step")
     axes[0].set_ylim(0, 1)  # F1 on its whole range: small moves look small
     fig.legend(*axes[0].get_legend_handles_labels(), loc="upper center", ncol=min(4, len(colours)), fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.86))
+    fig.tight_layout(rect=(0, 0, 1, 0.92))
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
 
