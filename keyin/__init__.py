@@ -11,5 +11,6 @@ RENAMED_SINCE_0_1 = {"keyin": "keyin_plus"}
 CONFIG_MODULE = "keyin.conf"
 
 # The entry of the run config every keyin-train checkpoint stores (keyin.checkpoints.CONFIG_KEY) that names the run's
-# config-group choices (``{"backbone": "ours", "scale": "cpu", ...}``; since 0.2): what the values alone do not name.
+# config-group choices (``{"backbone": "ours", "scale": "cpu", ...}``; checkpoints written before 2026-12-07 have none):
+# what the values alone do not name.
 CHOICES_KEY = "choices"

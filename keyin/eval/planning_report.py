@@ -45,7 +45,7 @@ PLANNER_ORDER = (*PAPER_TABLE2, "demo_subgoals")
 SERVO_DEFAULTS = {"servo_observe": "state", "servo_action_repeat": 2, "servo_horizon": 8}
 CURVE_END = 1.6  # world units: the success curves reach at least this threshold (past the initial distances)
 NOT_RECORDED = "not recorded"
-MODEL_NOT_RECORDED = "model not recorded"  # a row of the paper's method whose jobs hold no model config (keyin-plan before 0.2)
+MODEL_NOT_RECORDED = "model not recorded"  # a row of the paper's method whose jobs hold no model config (planned before 2026-12-07)
 
 
 @dataclass

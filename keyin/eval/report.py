@@ -152,7 +152,7 @@ def named_as_run(method: str, metrics: dict[str, Any], config: Mapping[str, Any]
 
 def model_run(config: DictConfig) -> dict[str, Any]:
     """A model's frame model and sizes as a job's metrics.json records them (``backbone``, ``scale``), from the run
-    config stored in its checkpoint: the config-group choices keyin-train records there (since 0.2), else the frame
+    config stored in its checkpoint: the config-group choices keyin-train records there (since 2026-12-07), else the frame
     model's name and the preset its sizes and budgets are (:func:`scale_preset`); None where neither says."""
     def known(key: str) -> Any:
         return OmegaConf.select(config, key, default=None, throw_on_resolution_failure=False)

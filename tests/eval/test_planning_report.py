@@ -222,7 +222,7 @@ def test_one_model_under_other_planning_seeds_is_its_own_row_and_not_a_servo_set
 def test_a_row_of_the_papers_method_names_what_its_model_changed_beside_the_papers_figures(tmp_path):
     ours = {"choices": {"backbone": "ours", "scale": "cpu"}, "backbone": {"name": "ours"}, "model": {"name": "keyin_paper"}}
     stated = {"choices": {"backbone": "paper", "scale": "paper"}, "model": {"keyframes": {"lr": 2e-4}}}
-    before_choices = {"backbone": {"name": "paper"}, "model": {"keyframes": {"lr": 1e-3}}}  # a checkpoint of before 0.2
+    before_choices = {"backbone": {"name": "paper"}, "model": {"keyframes": {"lr": 1e-3}}}  # a checkpoint from before choices were recorded
     write_job(tmp_path / "ours", "keyin_paper", 0, [0.1, 1.0, 0.1, 0.1], model_config=ours)
     write_job(tmp_path / "ours", "keyin_paper", 1, [0.1, 1.0, 1.0, 0.1], model_config=ours)
     write_job(tmp_path / "stated", "keyin_paper", 0, [0.1, 0.1, 0.1, 0.1], model_config=stated)
