@@ -62,6 +62,18 @@ def select_tasks(tasks: list[PlanningTask], value: Any) -> list[PlanningTask]:
     return [task for task in tasks if task.index in wanted]
 
 
+def write_model_config(checkpoint: str, folder: Path) -> DictConfig:
+    """The run config stored in ``checkpoint`` (a path or ``pretrained:<name>``), written as the planning job's
+    ``<folder>/model_config.yaml``: keyin-report names a row of the paper's method after the model planned with."""
+    from keyin.checkpoints import load_checkpoint
+    from keyin.eval.planning import MODEL_CONFIG
+    from keyin.lit.registry import run_config
+
+    model_config = OmegaConf.create(run_config(load_checkpoint(resolve(checkpoint))))
+    atomic_write_text(folder / MODEL_CONFIG, OmegaConf.to_yaml(model_config))
+    return model_config
+
+
 def check_plan(cfg: DictConfig) -> float:
     """The checks beyond the common ones; returns the success threshold."""
     check_common(cfg)
@@ -82,9 +94,7 @@ def plan(cfg: DictConfig) -> dict:
     import numpy as np
     from hydra.utils import instantiate
 
-    from keyin.checkpoints import load_checkpoint
-    from keyin.eval.planning import MODEL_CONFIG, planning_summary
-    from keyin.lit.registry import run_config
+    from keyin.eval.planning import planning_summary
     from keyin.planning.runner import PlanJob, run_tasks
     from keyin.planning.servo import ServoParams
     from keyin.planning.tasks import read_tasks, task_generator
@@ -104,9 +114,8 @@ def plan(cfg: DictConfig) -> dict:
         "task_files": {path.name: sha256_of(path) for path in files},
         **({"checkpoint_sha256": sha256_of(resolve(checkpoint))} if checkpoint else {}),  # resuming refuses a retrained one
     })
-    if checkpoint:  # the run config of the model planned with (keyin-report names a row of the paper's method after it)
-        model_config = OmegaConf.create(run_config(load_checkpoint(resolve(checkpoint))))
-        atomic_write_text(folder / MODEL_CONFIG, OmegaConf.to_yaml(model_config))
+    if checkpoint:
+        write_model_config(checkpoint, folder)
     job = PlanJob(
         planner=cfg.planner.name,
         controller=controller,

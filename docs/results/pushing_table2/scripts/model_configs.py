@@ -15,13 +15,9 @@ import json
 import sys
 from pathlib import Path
 
-from omegaconf import OmegaConf
-
-from keyin.checkpoints import load_checkpoint
+from keyin.cli.plan import write_model_config
 from keyin.eval.planning import MODEL_CONFIG
-from keyin.io import atomic_write_text
-from keyin.lit.registry import run_config
-from keyin.pretrained import registry, resolve
+from keyin.pretrained import registry
 
 TABLE = Path("docs/results/pushing_table2")
 MANIFEST = Path("models/manifest.json")
@@ -33,7 +29,7 @@ def committed_models(manifest: Path = MANIFEST) -> dict[str, str]:
     return files | {entry["sha256"]: f"pretrained:{name}" for name, entry in registry().items()}
 
 
-def write_model_config(job: Path, models: dict[str, str]) -> str:
+def back_fill(job: Path, models: dict[str, str]) -> str:
     """Write ``job``'s model config from the committed file its recorded hash names; what was done, in words."""
     if (job / MODEL_CONFIG).is_file():
         return f"has its {MODEL_CONFIG}; kept"
@@ -43,15 +39,14 @@ def write_model_config(job: Path, models: dict[str, str]) -> str:
     (planned, sha256), = recorded.items()
     if sha256 not in models:
         return f"planned with {planned} (sha256 {sha256[:12]}), not committed; none written"
-    config = OmegaConf.create(run_config(load_checkpoint(resolve(models[sha256]))))
-    atomic_write_text(job / MODEL_CONFIG, OmegaConf.to_yaml(config))
+    config = write_model_config(models[sha256], job)
     return f"{MODEL_CONFIG} from {models[sha256]} (model={config.model.name})"
 
 
 def main(table: Path = TABLE) -> None:
     models = committed_models()
     for job in sorted(path for path in (table / "jobs").iterdir() if (path / "metrics.json").is_file()):
-        print(f"{job.name}: {write_model_config(job, models)}")
+        print(f"{job.name}: {back_fill(job, models)}")
 
 
 if __name__ == "__main__":
