@@ -244,11 +244,13 @@ def test_the_stated_configuration_composes_to_every_value_the_paper_states():
 
 
 def test_the_stated_rows_job_configs_hold_every_value_the_paper_states():
-    """The stage 1 and every published stage-2 seed of the row README names (`keyin_paper_stated_10k_5k`), as they ran."""
+    """The stage 1 and every published stage-2 seed of the rows README names (`keyin_paper_stated_10k_5k`, item 4's
+    `keyin_paper_stated_10k_20k`), as they ran."""
     stage1 = ROOT / "docs/results/keyin_paper_stated/jobs/stated_seed0/config.yaml"
     seeds = sorted((ROOT / "docs/results/brownian_table1/jobs").glob("keyin_paper_stated_10k_5k_seed*/config.yaml"))
     assert [path.parent.name[-1] for path in seeds] == ["0", "1", "2"]  # the row's three seeds
-    for path in (stage1, *seeds):
+    longer = ROOT / "docs/results/brownian_table1/jobs/keyin_paper_stated_10k_20k_seed0/config.yaml"
+    for path in (stage1, *seeds, longer):
         job = OmegaConf.load(path)
         for key, value in STATED.items():
             assert OmegaConf.select(job, key) == value, (path, key, OmegaConf.select(job, key), value)
@@ -257,6 +259,8 @@ def test_the_stated_rows_job_configs_hold_every_value_the_paper_states():
     for path in seeds:  # the budget in the row's name: 10k + 5k of the paper's 100k + 200k steps
         job = OmegaConf.load(path)
         assert (job.model.name, job.scale.stage2_steps, job.stage) == ("keyin_paper_stated_10k_5k", 5000, "keyframes"), path
+    job = OmegaConf.load(longer)
+    assert (job.model.name, job.scale.stage2_steps, job.stage) == ("keyin_paper_stated_10k_20k", 20_000, "keyframes")
 
 
 def test_our_frame_model_keeps_what_the_keyin_paper_rows_ran():
