@@ -13,7 +13,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 INCHES_PER_PIXEL = 0.0118  # a 36-pixel frame (32 + borders) is 0.42 in wide
-LABEL_INCHES = 1.3  # the labels left of the strips
+LABEL_INCHES = 1.3  # the least room left of the strips for their labels
+LABEL_POINTS, LABEL_PAD = 7, 4  # the labels' font size and their gap to the strip, in points
+STRIPS_DPI = 110  # labelled strips are measured and written at this resolution (text widths depend on it)
 WALL_BLUE, START_PINK = "#2659d9", "#ff4fa0"
 
 
@@ -24,6 +26,14 @@ def save_figure(fig: plt.Figure, path: Path, dpi: int) -> Path:
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
+
+
+def label_inches(fig: plt.Figure, axes: Sequence[plt.Axes]) -> float:
+    """The room left of the strips that the widest of the axes' y-labels needs as drawn at the figure's dpi (with its
+    pad), at least ``LABEL_INCHES``: a long row name, such as a changed paper row's, is drawn whole."""
+    renderer = fig.canvas.get_renderer()
+    widest = max(ax.yaxis.label.get_window_extent(renderer).width for ax in axes) / fig.dpi
+    return max(LABEL_INCHES, widest + (LABEL_PAD + 6) / 72)
 
 
 def save_labeled_strips(strips: Sequence[np.ndarray], labels: Sequence[str], path: Path, title: str = "") -> Path:
@@ -37,19 +47,23 @@ def save_labeled_strips(strips: Sequence[np.ndarray], labels: Sequence[str], pat
     if len(strips) != len(labels):
         raise ValueError(f"save_labeled_strips needs one label per strip, got {len(labels)} for {len(strips)}")
     n_frames, height, width, _ = strips[0].shape
-    row = height * INCHES_PER_PIXEL  # inches
-    fig_width, fig_height = n_frames * width * INCHES_PER_PIXEL + LABEL_INCHES, len(strips) * row * 1.25 + 0.3
-    fig, axes = plt.subplots(len(strips), 1, squeeze=False, figsize=(fig_width, fig_height))
+    row, frames = height * INCHES_PER_PIXEL, n_frames * width * INCHES_PER_PIXEL  # inches
+    fig_height = len(strips) * row * 1.25 + 0.3
+    fig, axes = plt.subplots(len(strips), 1, squeeze=False, figsize=(frames + LABEL_INCHES, fig_height),
+                             dpi=STRIPS_DPI)
     for ax, strip, label in zip(axes[:, 0], strips, labels):
         ax.imshow(np.concatenate(list(strip), axis=1), interpolation="nearest")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_ylabel(label, rotation=0, ha="right", va="center", fontsize=7, labelpad=4)
+        ax.set_ylabel(label, rotation=0, ha="right", va="center", fontsize=LABEL_POINTS, labelpad=LABEL_PAD)
+    room = label_inches(fig, axes[:, 0])
+    fig_width = frames + room
+    fig.set_size_inches(fig_width, fig_height)
     if title:
         fig.suptitle(title, fontsize=8)
     top = 1 - (0.3 if title else 0.05) / fig_height
-    fig.subplots_adjust(left=LABEL_INCHES / fig_width, right=0.995, top=top, bottom=0.05 / fig_height, hspace=0.2)
-    return save_figure(fig, path, dpi=110)
+    fig.subplots_adjust(left=room / fig_width, right=0.995, top=top, bottom=0.05 / fig_height, hspace=0.2)
+    return save_figure(fig, path, dpi=STRIPS_DPI)
 
 
 def save_trajectories(

@@ -94,3 +94,14 @@ def test_contact_sheet_shows_each_keyframe_enlarged_in_reading_order(tmp_path):
     runs = [np.flatnonzero(column == level) for column, level in zip(first_row + second_row, levels)]
     assert all(len(run) == len(runs[0]) >= 16 for run in runs)  # each frame as tall, enlarged
     assert all(runs[i][0] == runs[0][0] for i in range(SHEET_COLUMNS)) and runs[SHEET_COLUMNS][0] > runs[0][-1]
+
+
+def test_a_long_row_label_is_drawn_whole_left_of_its_strip(tmp_path):
+    from keyin.viz.figures import save_labeled_strips
+
+    long = "keyin_paper_delta_st · backbone=ours scale=cpu"
+    strips = [marked_frames(torch.rand(5, 3, 32, 32), 2, [0], [1]) for _ in range(2)]
+    short = iio.imread(save_labeled_strips(strips, ["a", "clip 0\nrandom"], tmp_path / "short.png"))
+    image = iio.imread(save_labeled_strips(strips, ["a", f"clip 0\n{long}"], tmp_path / "long.png"))
+    assert image.shape[1] > short.shape[1]  # the figure widens for the long name, the strips keep their size
+    assert (image[:, :3, :3] > 200).all()  # white: no letter runs off the figure's left edge
