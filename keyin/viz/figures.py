@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 
 INCHES_PER_PIXEL = 0.0118  # a 36-pixel frame (32 + borders) is 0.42 in wide
 LABEL_INCHES = 1.3  # the least room left of the strips for their labels
-LABEL_POINTS, LABEL_PAD = 7, 4  # the labels' font size and their gap to the strip, in points
+LABEL_POINTS, LABEL_PAD, LABEL_MARGIN = 7, 4, 6  # points: the labels' size, their gap to the strip and to the edge
 STRIPS_DPI = 110  # labelled strips are measured and written at this resolution (text widths depend on it)
 WALL_BLUE, START_PINK = "#2659d9", "#ff4fa0"
 
@@ -33,7 +33,7 @@ def label_inches(fig: plt.Figure, axes: Sequence[plt.Axes]) -> float:
     pad), at least ``LABEL_INCHES``: a long row name, such as a changed paper row's, is drawn whole."""
     renderer = fig.canvas.get_renderer()
     widest = max(ax.yaxis.label.get_window_extent(renderer).width for ax in axes) / fig.dpi
-    return max(LABEL_INCHES, widest + (LABEL_PAD + 6) / 72)
+    return max(LABEL_INCHES, widest + (LABEL_PAD + LABEL_MARGIN) / 72)
 
 
 def save_labeled_strips(strips: Sequence[np.ndarray], labels: Sequence[str], path: Path, title: str = "") -> Path:
