@@ -256,11 +256,11 @@ def test_the_stated_rows_job_configs_hold_every_value_the_paper_states():
             assert OmegaConf.select(job, key) == value, (path, key, OmegaConf.select(job, key), value)
         assert job.backbone.name == "paper" and job.scale.stage1_steps == 10_000, path
     assert OmegaConf.load(stage1).model.name == "keyin_paper_stated_20k"  # the experiment's name when it ran
-    for path in seeds:  # the budget in the row's name: 10k + 5k of the paper's 100k + 200k steps
+    # the budget in the row's name: 10k + 5k (or 20k) of the paper's 100k + 200k steps
+    budgets = {path: ("keyin_paper_stated_10k_5k", 5000) for path in seeds} | {longer: ("keyin_paper_stated_10k_20k", 20_000)}
+    for path, (name, steps) in budgets.items():
         job = OmegaConf.load(path)
-        assert (job.model.name, job.scale.stage2_steps, job.stage) == ("keyin_paper_stated_10k_5k", 5000, "keyframes"), path
-    job = OmegaConf.load(longer)
-    assert (job.model.name, job.scale.stage2_steps, job.stage) == ("keyin_paper_stated_10k_20k", 20_000, "keyframes")
+        assert (job.model.name, job.scale.stage2_steps, job.stage) == (name, steps, "keyframes"), path
 
 
 def test_our_frame_model_keeps_what_the_keyin_paper_rows_ran():
